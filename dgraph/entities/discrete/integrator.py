@@ -1,0 +1,36 @@
+"""Integrator: forward-Euler integral of its input."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import dgraph as dg
+from dgraph.entities.discrete.state_shape import initial_state, state_shape
+
+
+@dg.register
+class Integrator(dg.Entity):
+    """Forward Euler: ``output(t + 1) = output(t) + dt * input(t)``, ``output(0) = initial``.
+
+    Parameters: ``size`` (None for scalars), ``initial`` (default 0), ``dt`` (default: the
+    graph's). Inputs: ``input``. States: ``output``.
+    """
+
+    has_state = True
+    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+    initial = dg.Param(None, kind="vector", doc="initial value (default 0)")
+    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    input = dg.Input(shape=state_shape, doc="the derivative")
+    output = dg.State(shape=state_shape, doc="the integral")
+
+    def reset(self) -> None:
+        """Start from the initial value."""
+        self.output.set(initial_state(self), 0)
+
+    def prepare_state(self, t: int) -> None:
+        """Compute ``x + dt u`` at ``t``."""
+        self._next: Any = self.output(t) + self.dt * self.input(t)
+
+    def commit_state(self, t_next: int) -> None:
+        """Publish the integral at ``t + 1``."""
+        self.output.set(self._next, t_next)

@@ -1,0 +1,47 @@
+"""Add: a weighted sum of n inputs."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import dgraph as dg
+from dgraph.entities.operators.shape import vector_shape
+
+
+@dg.register
+class Add(dg.Entity):
+    """Weighted sum ``output = sum_i coefficients[i] * in_i``.
+
+    Parameters: ``n_inputs`` (default 2), ``coefficients`` (default all 1; ``[1, -1]`` is a
+    difference), ``size`` (None for scalars).
+    Inputs: ``in0 .. in{n-1}``. Outputs: ``output``.
+    """
+
+    n_inputs = dg.Param(2, kind="int", doc="number of summed inputs")
+    coefficients = dg.Param(None, kind="vector", doc="weight of each input (default: all 1)")
+    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+
+    def configure(self) -> None:
+        """Declare the inputs ``in0 .. in{n-1}`` and check the coefficients."""
+        if self.n_inputs < 1:
+            raise dg.ParamError(f"{self.name}: n_inputs must be >= 1", entity=self.name)
+        coeffs = [1.0] * self.n_inputs if self.coefficients is None else list(self.coefficients.ravel())
+        if len(coeffs) != self.n_inputs:
+            raise dg.ParamError(f"{self.name}: {len(coeffs)} coefficients for {self.n_inputs} inputs",
+                             entity=self.name)
+        self._coeffs = [float(c) for c in coeffs]
+        for i in range(self.n_inputs):
+            self.declare(f"in{i}", dg.Input(shape=vector_shape, doc=f"term {i}"))
+
+    def setup(self) -> None:
+        """Pair each input with its coefficient."""
+        self._terms = [(c, getattr(self, f"in{i}")) for i, c in enumerate(self._coeffs)]
+
+    @dg.output(shape=vector_shape)
+    def output(self, t: int) -> Any:
+        """The weighted sum."""
+        total: Any = 0.0
+        for c, term in self._terms:
+            value = term(t)
+            total = total + (value if c == 1.0 else c * value)
+        return total

@@ -1,0 +1,33 @@
+"""Gain: a scalar, diagonal or matrix gain applied to a vector."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.operators.shape import vector_shape
+
+
+@dg.register
+class Gain(dg.Entity):
+    """``output = gain * input`` with a scalar or diagonal gain, or ``gain @ input`` for a matrix.
+
+    Parameters: ``size`` (None for scalars). Inputs: ``input``; ``gain`` (default 1; a
+    scalar, a vector of ``size`` for a diagonal gain, or a ``size x size`` matrix).
+    Outputs: ``output``.
+    """
+
+    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+    input = dg.Input(shape=vector_shape, doc="the signal to scale")
+    gain = dg.Input(shape=None, default=1.0, doc="scalar, diagonal (vector) or matrix gain")
+
+    @dg.output(shape=vector_shape, depends=("input", "gain"))
+    def output(self, t: int) -> Any:
+        """The scaled input."""
+        k = self.gain(t)
+        u = self.input(t)
+        if isinstance(k, np.ndarray) and k.ndim == 2:
+            return k @ u
+        return k * u

@@ -1,0 +1,37 @@
+"""Switch: route one of n inputs to the output."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import dgraph as dg
+from dgraph.entities.operators.shape import vector_shape
+
+
+@dg.register
+class Switch(dg.Entity):
+    """``output = in_k`` with ``k = selection``; only the selected input is evaluated.
+
+    Parameters: ``n_inputs`` (default 2), ``size`` (None for scalars).
+    Inputs: ``selection`` (int, default 0), ``in0 .. in{n-1}``. Outputs: ``output``.
+    """
+
+    n_inputs = dg.Param(2, kind="int", doc="number of inputs")
+    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+    selection = dg.Input(shape=(), dtype="int", default=0, doc="index of the routed input")
+
+    def configure(self) -> None:
+        """Declare the inputs ``in0 .. in{n-1}``."""
+        if self.n_inputs < 1:
+            raise dg.ParamError(f"{self.name}: n_inputs must be >= 1", entity=self.name)
+        for i in range(self.n_inputs):
+            self.declare(f"in{i}", dg.Input(shape=vector_shape))
+
+    @dg.output(shape=vector_shape)
+    def output(self, t: int) -> Any:
+        """The selected input."""
+        k = self.selection(t)
+        if not 0 <= k < self.n_inputs:
+            raise dg.ComputeError(f"{self.name}.selection = {k} at tick {t}, expected 0..{self.n_inputs - 1}",
+                               entity=self.name, signal="selection")
+        return getattr(self, f"in{k}")(t)

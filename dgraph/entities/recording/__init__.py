@@ -1,0 +1,1 @@
+"""Recording: the Recorder entity (numpy columns saved as .npz, streamed to Rerun)."""

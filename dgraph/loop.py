@@ -1,0 +1,90 @@
+"""The device loop: one tick of a graph, and runs of many ticks with progress.
+
+One tick at ``t``:
+
+1. ``before`` hooks of every device, at ``t``;
+2. every stateful entity prepares its next state from the values at ``t`` (devices pull
+   their control here, so this is where the graph is evaluated);
+3. observers (recorders) read what they record, at ``t``;
+4. every stateful entity commits its state, stamped ``t + 1``;
+5. ``after`` hooks of every device, at ``t + 1``.
+
+Nothing is committed if steps 1-3 fail, so a failing hook or computation leaves the state
+at ``t``, consistent, and the loop can be resumed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+from dgraph.errors import GraphError
+
+if TYPE_CHECKING:
+    from dgraph.device import Device
+    from dgraph.entity import Entity
+    from dgraph.graph import Graph
+
+PROGRESS_MIN_TICKS = 5000
+"""Runs at least this long show a progress bar by default."""
+
+
+def transition(devices: Sequence[Device], stateful: Sequence[Entity], observers: Sequence[Entity],
+               t: int) -> None:
+    """Steps 1-4 of a tick from ``t``: after it, every state is stamped ``t + 1``."""
+    for device in devices:
+        device.before.run(t)
+    for entity in stateful:
+        entity.prepare_state(t)
+    for entity in observers:
+        entity.observe(t)
+    for entity in stateful:
+        entity.commit_state(t + 1)
+
+
+def run_after_hooks(devices: Sequence[Device], t_next: int) -> None:
+    """Step 5 of a tick: the ``after`` hooks, at the new tick."""
+    for device in devices:
+        device.after.run(t_next)
+
+
+def step(graph: Graph) -> None:
+    """Advance ``graph`` by one tick."""
+    roles = graph.roles()
+    transition(roles["devices"], roles["stateful"], roles["observers"], graph.t)
+    graph.t += 1
+    run_after_hooks(roles["devices"], graph.t)
+
+
+def run(graph: Graph, ticks: int | None = None, duration: float | None = None,
+        progress: bool | None = None) -> None:
+    """Run ``ticks`` ticks, or ``duration`` seconds of control time (``round(duration / dt)``).
+
+    ``progress=None`` shows a progress bar (tqdm, on stderr) for runs of at least
+    :data:`PROGRESS_MIN_TICKS` ticks.
+    """
+    if (ticks is None) == (duration is None):
+        raise GraphError("run needs exactly one of ticks= or duration=")
+    if duration is not None:
+        if not duration >= 0:
+            raise GraphError(f"duration must be >= 0 s, got {duration!r}")
+        ticks = int(round(duration / graph.dt))
+    if not isinstance(ticks, int) or ticks < 0:
+        raise GraphError(f"ticks must be an int >= 0, got {ticks!r}")
+    if not graph.roles()["stateful"]:
+        raise GraphError(f"graph {graph.name!r} has no device or stateful entity to step")
+    show = ticks >= PROGRESS_MIN_TICKS if progress is None else progress
+    if not show:
+        for _ in range(ticks):
+            step(graph)
+        return
+    from tqdm import tqdm
+    with tqdm(total=ticks, unit="tick", desc=graph.name, mininterval=0.5, leave=False) as bar:
+        done = 0
+        chunk = max(1, ticks // 200)
+        while done < ticks:
+            n = min(chunk, ticks - done)
+            for _ in range(n):
+                step(graph)
+            done += n
+            bar.update(n)

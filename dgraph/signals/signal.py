@@ -1,0 +1,410 @@
+"""Signals: the time-stamped, lazily cached ports of entities.
+
+Three kinds of signals, all read with ``sig(t)``:
+
+* :class:`Output` -- computed by a method of its entity, cached, recomputed at most once per
+  tick and only when something it depends on changed (push-invalidate, pull-evaluate).
+* :class:`State` -- an output set by its entity during the tick transition (device state,
+  delay memory). It breaks cycles: nothing computed at tick ``t`` flows through it.
+* :class:`Input` -- plugged to an output, or holding a constant, or falling back on a default.
+
+A port declared at class level (``u = Input(shape=(3,))``) is a *template*; each entity
+instance binds its own copy (see :mod:`dgraph.entity`). The contract is written out in
+``docs/design.md``.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any
+
+from dgraph.errors import ComputeError, DGraphError, PlugError, SpecError, UnpluggedInputError
+from dgraph.signals.clock import Clock
+from dgraph.signals.spec import ShapeDecl, Spec, resolve_shape
+
+if TYPE_CHECKING:
+    from dgraph.entity import Entity
+
+_UNSET = object()
+
+
+class Signal:
+    """Common part of inputs and outputs: owner, name, spec and documentation."""
+
+    __slots__ = ("entity", "name", "spec", "doc", "_shape_decl", "_dtype", "_labels")
+
+    def __init__(self, shape: ShapeDecl = None, dtype: str = "float",
+                 labels: Sequence[str] | None = None, doc: str = ""):
+        self.entity: Entity | None = None
+        self.name = ""
+        self._shape_decl = shape
+        self._dtype = dtype
+        self._labels = labels
+        self.spec = Spec(shape if isinstance(shape, tuple) and all(
+            d is None or isinstance(d, int) for d in shape) else None, dtype, labels)
+        self.doc = doc
+
+    @property
+    def full_name(self) -> str:
+        """``entity.signal``, the name used by graph files, plots and errors."""
+        owner = self.entity.name if self.entity is not None else "<unbound>"
+        return f"{owner}.{self.name}"
+
+    def _bind_common(self, other: Signal, entity: Entity, name: str) -> None:
+        other.entity = entity
+        other.name = name
+        other._shape_decl = self._shape_decl
+        other._dtype = self._dtype
+        other._labels = self._labels
+        other.doc = self.doc
+        where = f"{entity.name}.{name}"
+        try:
+            other.spec = Spec(resolve_shape(self._shape_decl, entity), self._dtype, self._labels)
+        except SpecError as exc:
+            raise SpecError(f"{where}: {exc}", entity=entity.name, signal=name) from None
+
+    def _unbound(self) -> DGraphError:
+        return DGraphError(f"signal {self.name or '?'} is a class-level declaration; "
+                           "read it from an entity instance")
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.full_name} {self.spec!r} t={self.time} value={_short(self.value)}>"
+
+    @property
+    def value(self) -> Any:  # overridden
+        """The last value, without computing anything."""
+        return None
+
+    @property
+    def time(self) -> int | None:  # overridden
+        """The tick of the last value (``None`` if never computed or set)."""
+        return None
+
+
+class Output(Signal):
+    """A computed output: ``out(t)`` returns the value at tick ``t``, recomputing lazily.
+
+    Recomputes when read at ``t`` only if it was never computed or something it depends on
+    changed since; never more than once per tick. With ``period=N`` it recomputes at most every
+    N ticks. Counters: ``count`` (computations), ``total_duration`` (seconds, when profiling).
+    """
+
+    __slots__ = ("_fn", "_value", "_time", "_stale", "_down", "_plugged", "_clock", "_computing",
+                 "period", "depends", "time_varying", "deps", "count", "total_duration", "_held")
+
+    def __init__(self, fn: Callable[..., Any] | None = None, *, shape: ShapeDecl = None,
+                 dtype: str = "float", depends: Sequence[str] | None = None, period: int = 1,
+                 labels: Sequence[str] | None = None, doc: str = ""):
+        super().__init__(shape, dtype, labels, doc or (fn.__doc__ or "" if fn else "").strip())
+        if not isinstance(period, int) or period < 1:
+            raise SpecError(f"period must be an int >= 1, got {period!r}")
+        self._fn = fn
+        self.period = period
+        self.depends = None if depends is None else tuple(depends)
+        self.time_varying = self.depends is not None and "t" in self.depends
+        self._value: Any = None
+        self._time: int | None = None
+        self._stale = True
+        self._down: list[Output] = []
+        self._plugged: list[Input] = []
+        self._clock: Clock | None = None
+        self._computing = False
+        self.deps: list[Signal] = []
+        self.count = 0
+        self.total_duration = 0.0
+        self._held = False
+
+    def bind(self, entity: Entity, name: str) -> Output:
+        """Return this template's copy for ``entity`` (called by :class:`~dgraph.Entity`)."""
+        out = type(self).__new__(type(self))
+        Output.__init__(out, None, depends=self.depends, period=self.period)
+        self._bind_common(out, entity, name)
+        if self._fn is not None:
+            out._fn = self._fn.__get__(entity)
+        out._clock = entity._clock
+        return out
+
+    # -- reading ----------------------------------------------------------------------------
+    def __call__(self, t: int) -> Any:
+        """The value at tick ``t``, recomputed only if stale."""
+        clock = self._clock
+        if t != clock.t:
+            clock.advance(t)
+        if self._stale:
+            return self._recompute(t)
+        return self._value
+
+    def _recompute(self, t: int) -> Any:
+        if self._time is not None and self.period > 1 and self._time <= t < self._time + self.period:
+            return self._hold()
+        if self._computing:
+            raise ComputeError(f"{self.full_name} was read during its own computation at tick {t} "
+                               "(an undeclared algebraic loop)", entity=self.entity.name, signal=self.name)
+        clock = self._clock
+        self._computing = True
+        profiling = clock.profiling
+        if profiling:  # exclusive time: what upstream computations took is not counted here
+            outer_inner, clock.inner = clock.inner, 0.0
+            start = _time.perf_counter()
+        try:
+            value = self._fn(t)
+        except DGraphError:
+            raise
+        except Exception as exc:
+            raise ComputeError(f"{self.full_name} failed at tick {t}: {type(exc).__name__}: {exc}",
+                               entity=self.entity.name, signal=self.name) from exc
+        finally:
+            self._computing = False
+            if profiling:
+                elapsed = _time.perf_counter() - start
+                self.total_duration += elapsed - clock.inner
+                clock.inner = outer_inner + elapsed
+        if clock.check_values:
+            self.spec.check(value, f"{self.full_name} at tick {t}")
+        self._value = value
+        self._time = t
+        self._stale = not clock.cache_enabled
+        self.count += 1
+        return value
+
+    def _hold(self) -> Any:
+        """Serve the cached value of a periodic output until its period has elapsed."""
+        if not self._held:
+            self._held = True
+            self._clock.held.append(self)
+        return self._value
+
+    def release_hold(self) -> None:
+        """End of a periodic hold: everything that read the held value becomes stale."""
+        self._held = False
+        self._stale = True
+        _invalidate_all(self._down)
+
+    # -- staleness --------------------------------------------------------------------------
+    def invalidate(self) -> None:
+        """Mark this output and everything downstream of it stale (stops at stale nodes)."""
+        if self._stale:
+            return
+        self._stale = True
+        if self._down:
+            _invalidate_all(self._down)
+
+    @property
+    def stale(self) -> bool:
+        """True if the next read will recompute (or serve a periodic hold)."""
+        return self._stale
+
+    @property
+    def value(self) -> Any:
+        """The last computed value (``None`` if never computed); computes nothing."""
+        return self._value
+
+    @property
+    def time(self) -> int | None:
+        """The tick of the last computation."""
+        return self._time
+
+    @property
+    def plugged_inputs(self) -> list[Input]:
+        """The inputs this output feeds."""
+        return list(self._plugged)
+
+
+def _invalidate_all(nodes: list[Output]) -> None:
+    """Iterative depth-first invalidation (no recursion limit on long chains)."""
+    stack = list(nodes)
+    pop, extend = stack.pop, stack.extend
+    while stack:
+        node = pop()
+        if not node._stale:
+            node._stale = True
+            if node._down:
+                extend(node._down)
+
+
+class State(Output):
+    """An output whose value the entity sets during the tick transition (``set(value, t)``).
+
+    Device state and delay memory are States. Reading never computes; setting a new value
+    invalidates everything downstream. Nothing computed at a tick flows into a State, so a
+    loop closed through a State is legal.
+    """
+
+    __slots__ = ("initial",)
+
+    def __init__(self, *, shape: ShapeDecl = None, dtype: str = "float", initial: Any = None,
+                 labels: Sequence[str] | None = None, doc: str = ""):
+        super().__init__(None, shape=shape, dtype=dtype, depends=(), labels=labels, doc=doc)
+        self.initial = initial
+
+    def bind(self, entity: Entity, name: str) -> State:
+        """Return this template's copy for ``entity``."""
+        out = State.__new__(State)
+        State.__init__(out, initial=self.initial)
+        self._bind_common(out, entity, name)
+        out._clock = entity._clock
+        out._stale = False
+        return out
+
+    def __call__(self, t: int) -> Any:
+        """The current state (set by the entity, stamped with the tick it belongs to)."""
+        clock = self._clock
+        if t != clock.t:
+            clock.advance(t)
+        if self._time is None:
+            raise UnpluggedInputError(f"state {self.full_name} was read before it was initialised",
+                                      entity=self.entity.name, signal=self.name)
+        return self._value
+
+    def set(self, value: Any, t: int) -> None:
+        """Store ``value`` as the state at tick ``t`` and invalidate everything downstream."""
+        self._value = self.spec.coerce(value, self.full_name)
+        self._time = t
+        _invalidate_all(self._down)
+
+    def invalidate(self) -> None:
+        """A state never becomes stale: it changes only when its entity sets it."""
+
+
+class Input(Signal):
+    """An input port: plugged to an output, or holding a constant, or using its default.
+
+    ``inp(t)`` forwards to the plugged output; ``inp.set(v)`` stores a constant (unplugging
+    first); ``default`` is used when neither. Reading an input with none of them raises
+    :class:`~dgraph.errors.UnpluggedInputError` naming ``entity.signal``.
+    """
+
+    __slots__ = ("_source", "_value", "_has_value", "_set_time", "is_set", "default", "_subs")
+
+    def __init__(self, shape: ShapeDecl = None, dtype: str = "float", default: Any = _UNSET,
+                 labels: Sequence[str] | None = None, doc: str = ""):
+        super().__init__(shape, dtype, labels, doc)
+        self.default = default
+        self._source: Output | None = None
+        self._value: Any = None
+        self._has_value = False
+        self._set_time: int | None = None
+        self.is_set = False
+        self._subs: list[Output] = []
+
+    @property
+    def has_default(self) -> bool:
+        """True if a default value was declared."""
+        return self.default is not _UNSET
+
+    def bind(self, entity: Entity, name: str) -> Input:
+        """Return this template's copy for ``entity`` (with its default coerced)."""
+        inp = Input.__new__(Input)
+        Input.__init__(inp, default=self.default)
+        self._bind_common(inp, entity, name)
+        if inp.has_default:
+            inp._value = inp.spec.coerce(self.default, f"default of {inp.full_name}")
+            inp._has_value = True
+            inp.default = inp._value
+        return inp
+
+    def __call__(self, t: int) -> Any:
+        """The value at tick ``t``."""
+        source = self._source
+        if source is not None:
+            return source(t)
+        if self._has_value:
+            return self._value
+        if self.entity is None:
+            raise self._unbound()
+        raise UnpluggedInputError(f"input {self.full_name} is read at tick {t} but is neither "
+                                  "plugged nor set and has no default", entity=self.entity.name,
+                                  signal=self.name)
+
+    # -- constants ------------------------------------------------------------------------
+    def set(self, value: Any) -> None:
+        """Hold the constant ``value`` (unplugs first). Dependents recompute once."""
+        if self.entity is None:
+            raise self._unbound()
+        coerced = self.spec.coerce(value, self.full_name)
+        if self._source is not None:
+            self.unplug()
+        self._value = coerced
+        self._has_value = True
+        self.is_set = True
+        self._set_time = self.entity._clock.t
+        _invalidate_all(self._subs)
+
+    def reset(self) -> None:
+        """Forget a constant set with :meth:`set` and fall back to the default (if any)."""
+        if self.is_set:
+            self.is_set = False
+            self._has_value = self.has_default
+            self._value = self.default if self.has_default else None
+            _invalidate_all(self._subs)
+
+    # -- plugging ---------------------------------------------------------------------------
+    def plug(self, source: Output) -> None:
+        """Plug ``source`` into this input (shape/dtype checked; no graph-level checks).
+
+        Prefer :func:`dgraph.plug` or :meth:`Graph.plug`, which also refuse cycles.
+        """
+        if not isinstance(source, Output):
+            raise PlugError(f"cannot plug {source!r} into {self.full_name}: not an output")
+        if not self.spec.accepts(source.spec):
+            raise PlugError(f"cannot plug {source.full_name} {source.spec!r} into {self.full_name} "
+                            f"{self.spec!r}: shape or dtype mismatch", entity=self.entity.name,
+                            signal=self.name)
+        if self._source is not None:
+            self.unplug()
+        self.is_set = False
+        self._source = source
+        source._plugged.append(self)
+        source._down.extend(self._subs)
+        _invalidate_all(self._subs)
+
+    def unplug(self) -> None:
+        """Disconnect from the plugged output; the input keeps no value unless set or default."""
+        source = self._source
+        if source is None:
+            return
+        source._plugged.remove(self)
+        for sub in self._subs:
+            source._down.remove(sub)
+        self._source = None
+        if not self.is_set:
+            self._has_value = self.has_default
+            self._value = self.default if self.has_default else None
+        _invalidate_all(self._subs)
+
+    @property
+    def source(self) -> Output | None:
+        """The plugged output, or ``None``."""
+        return self._source
+
+    @property
+    def value(self) -> Any:
+        """The constant, or the plugged output's last value; computes nothing."""
+        return self._source.value if self._source is not None else self._value
+
+    @property
+    def time(self) -> int | None:
+        """The stamp of the plugged output's last value, or the tick at which the constant was set."""
+        return self._source.time if self._source is not None else self._set_time
+
+
+def _short(value: Any) -> str:
+    text = repr(value).replace("\n", "")
+    return text if len(text) <= 50 else text[:47] + "..."
+
+
+def output(shape: ShapeDecl = None, dtype: str = "float", depends: Sequence[str] | None = None,
+           period: int = 1, labels: Sequence[str] | None = None,
+           doc: str = "") -> Callable[[Callable[..., Any]], Output]:
+    """Decorator declaring a computed output from a method ``def name(self, t)``.
+
+    ``depends`` lists the names of the entity's inputs, states and other outputs that the
+    method reads, plus ``"t"`` if the value depends on time itself. Without it, the output
+    depends on every input and state of the entity (conservative).
+    """
+
+    def wrap(fn: Callable[..., Any]) -> Output:
+        return Output(fn, shape=shape, dtype=dtype, depends=depends, period=period, labels=labels, doc=doc)
+
+    return wrap

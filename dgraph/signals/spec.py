@@ -1,0 +1,158 @@
+"""Signal specifications: the declared shape, dtype and component labels of a signal.
+
+A :class:`Spec` is declared on a port (possibly with a shape that depends on the entity's
+parameters) and resolved to concrete dimensions when the entity is built. It coerces values
+that are set, checks values that are computed, and decides whether two ports may be plugged.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from dgraph.errors import SpecError
+
+ShapeDecl = tuple[int | str | None, ...] | str | Callable[[Any], Any] | None
+"""A declared shape: a tuple of ints (``None`` = any size, ``str`` = name of an entity
+attribute giving the size), a callable of the entity returning a shape, or ``None`` (any)."""
+
+DTYPES = ("float", "int", "bool", "object")
+
+
+class Spec:
+    """Resolved shape and dtype of a signal.
+
+    ``shape`` is ``None`` (any shape) or a tuple whose entries are ints or ``None`` (any size
+    along that axis). ``dtype`` is one of ``float``, ``int``, ``bool`` or ``object`` (no check).
+    ``labels`` optionally names the components of a vector (used by recorders and plots).
+    """
+
+    __slots__ = ("shape", "dtype", "labels", "exact")
+
+    def __init__(self, shape: tuple[int | None, ...] | None = None, dtype: str = "float",
+                 labels: Sequence[str] | None = None):
+        if dtype not in DTYPES:
+            raise SpecError(f"unknown dtype {dtype!r}; expected one of {DTYPES}")
+        self.shape = None if shape is None else tuple(shape)
+        self.dtype = dtype
+        self.labels = tuple(labels) if labels is not None else None
+        self.exact = self.shape is not None and all(d is not None for d in self.shape)
+
+    def __repr__(self) -> str:
+        shape = "any" if self.shape is None else "(" + ", ".join(
+            "*" if d is None else str(d) for d in self.shape) + ("," if len(self.shape) == 1 else "") + ")"
+        return f"{self.dtype}{shape}"
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Spec) and (self.shape, self.dtype) == (other.shape, other.dtype)
+
+    def __hash__(self) -> int:
+        return hash((self.shape, self.dtype))
+
+    # -- plugging -------------------------------------------------------------------------
+    def accepts(self, source: Spec) -> bool:
+        """True if a signal of spec ``source`` may feed an input of this spec."""
+        if self.dtype != "object" and source.dtype != "object":
+            if self.dtype != source.dtype and not (self.dtype == "float" and source.dtype in ("int", "bool")):
+                return False
+        if self.shape is None or source.shape is None:
+            return True
+        if len(self.shape) != len(source.shape):
+            return False
+        return all(a is None or b is None or a == b for a, b in zip(self.shape, source.shape))
+
+    # -- values ---------------------------------------------------------------------------
+    def _shape_ok(self, shape: tuple[int, ...]) -> bool:
+        if self.shape is None:
+            return True
+        if len(shape) != len(self.shape):
+            return False
+        return all(d is None or d == s for d, s in zip(self.shape, shape))
+
+    def coerce(self, value: Any, where: str) -> Any:
+        """Return ``value`` converted to this spec (a float, int, bool or a fresh array).
+
+        Raises :class:`SpecError` naming ``where`` on a wrong shape, a wrong type or NaN.
+        """
+        if self.dtype == "object":
+            return value
+        scalar = self.shape == () or (self.shape is None and np.ndim(value) == 0)
+        try:
+            if scalar:
+                return self._coerce_scalar(value, where)
+            array = np.array(value, dtype=_NUMPY[self.dtype])
+        except (TypeError, ValueError) as exc:
+            raise SpecError(f"{where}: cannot convert {_short(value)} to {self!r}: {exc}") from None
+        if not self._shape_ok(array.shape):
+            raise SpecError(f"{where}: value of shape {array.shape} does not match {self!r}")
+        if self.dtype == "float" and np.isnan(array).any():
+            raise SpecError(f"{where}: value contains NaN: {_short(value)}")
+        return array
+
+    def _coerce_scalar(self, value: Any, where: str) -> Any:
+        if np.ndim(value) != 0:
+            raise SpecError(f"{where}: expected a scalar {self.dtype}, got shape {np.shape(value)}")
+        if isinstance(value, str) or value is None:
+            raise SpecError(f"{where}: expected a scalar {self.dtype}, got {_short(value)}")
+        if self.dtype == "float":
+            out = float(value)
+            if math.isnan(out):
+                raise SpecError(f"{where}: value is NaN")
+            return out
+        if self.dtype == "int":
+            out = int(value)
+            if out != value or isinstance(value, bool):
+                raise SpecError(f"{where}: expected an int, got {_short(value)}")
+            return out
+        if value not in (0, 1) or not isinstance(value, (bool, int, np.bool_, np.integer)):
+            raise SpecError(f"{where}: expected a bool, got {_short(value)}")
+        return bool(value)
+
+    def check(self, value: Any, where: str) -> None:
+        """Check a computed value: type, shape and absence of NaN (raises :class:`SpecError`)."""
+        if self.dtype == "object":
+            return
+        if type(value) is float:
+            if self.shape not in (None, ()):
+                raise SpecError(f"{where}: computed a scalar, declared {self!r}")
+            if value != value:
+                raise SpecError(f"{where}: computed NaN")
+            return
+        if isinstance(value, np.ndarray):
+            if not self._shape_ok(value.shape):
+                raise SpecError(f"{where}: computed shape {value.shape}, declared {self!r}")
+            if self.dtype == "float" and value.dtype.kind == "f" and np.isnan(value).any():
+                raise SpecError(f"{where}: computed a value containing NaN")
+            return
+        self._coerce_scalar(value, where)
+
+
+_NUMPY = {"float": np.float64, "int": np.int64, "bool": np.bool_}
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def resolve_shape(shape: ShapeDecl, owner: Any) -> tuple[int | None, ...] | None:
+    """Turn a declared shape into concrete dimensions using the owning entity's attributes."""
+    if shape is None:
+        return None
+    if callable(shape):
+        shape = shape(owner)
+        if shape is None:
+            return None
+    if isinstance(shape, (str, int)):
+        shape = (shape,)
+    dims: list[int | None] = []
+    for dim in shape:
+        if isinstance(dim, str):
+            dim = getattr(owner, dim)
+        if dim is not None and (not isinstance(dim, (int, np.integer)) or dim < 0):
+            raise SpecError(f"invalid dimension {dim!r} in shape {shape!r}")
+        dims.append(None if dim is None else int(dim))
+    return tuple(dims)
