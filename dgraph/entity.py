@@ -76,6 +76,10 @@ class Entity:
                     params[attr] = value
                 elif callable(value) and getattr(value, "_dg_command", False) and attr not in commands:
                     commands.append(attr)
+        for attr in [*ports, *params]:
+            if attr in _RESERVED:
+                raise DGraphError(f"{cls.__name__}: {attr!r} is an Entity attribute and cannot name a "
+                                  "port or parameter")
         for pname in params:
             # a parameter may share its name with a base-class property (``dt``): the property
             # reads the parameter, so the declaration must not shadow it on the class
@@ -112,9 +116,11 @@ class Entity:
             raise ParamError(f"{self.name} ({self.type_name}): unknown parameter(s) "
                              f"{', '.join(sorted(unknown))}; known: {known}", entity=self.name)
         self.params: dict[str, Any] = {}
+        self.given_params: dict[str, Any] = {}
         for pname, decl in self._param_decls.items():
             if pname in given:
                 value = decl.convert(given[pname], self.name)
+                self.given_params[pname] = value
             elif decl.required:
                 raise ParamError(f"{self.name} ({self.type_name}): missing required parameter "
                                  f"{pname!r}", entity=self.name)
@@ -204,8 +210,8 @@ class Entity:
                           entity=self.name)
 
     @property
-    def signals(self) -> dict[str, Signal]:
-        """All ports by name."""
+    def ports(self) -> dict[str, Signal]:
+        """All signals (inputs, outputs, states) by name."""
         return dict(self._signals)
 
     @property
@@ -239,8 +245,7 @@ class Entity:
             lines.append(f"  param   {param.describe()}")
         for name, port in cls._port_templates.items():
             kind = {Input: "input", State: "state"}.get(type(port), "output")
-            shape = port._shape_decl if port._shape_decl is not None else "any"
-            lines.append(f"  {kind:<7} {name} {port._dtype}{shape}" + (f"  -- {port.doc.splitlines()[0]}" if port.doc else ""))
+            lines.append(f"  {kind:<7} {name} {port._dtype}{_shape_text(port._shape_decl)}" + (f"  -- {port.doc.splitlines()[0]}" if port.doc else ""))
         for name in cls._command_names:
             doc = (getattr(cls, name).__doc__ or "").strip().splitlines()
             lines.append(f"  command {name}()" + (f"  -- {doc[0]}" if doc else ""))
@@ -258,3 +263,14 @@ class Entity:
                 value = value[:57] + "..."
             lines.append(f"  {kind} {name:<16} t={sig.time!s:<6} {value}{origin}")
         return "\n".join(lines)
+
+
+def _shape_text(shape: Any) -> str:
+    if shape is None:
+        return "(any)"
+    if callable(shape):
+        return "(sized by parameters)"
+    return str(tuple(shape) if not isinstance(shape, str) else (shape,))
+
+
+_RESERVED = {n for n in dir(Entity) if not n.startswith("_")} - {"dt"}

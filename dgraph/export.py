@@ -46,7 +46,7 @@ def to_dot(graph: Graph, signals: bool = False) -> str:
         for e in graph:
             out.append(f'  subgraph "cluster_{e.name}" {{')
             out.append(f'    label="{e.name} ({e.type_name})"; style=rounded;')
-            for sig in e.signals.values():
+            for sig in e.ports.values():
                 shape = {Input: "ellipse", State: "box"}.get(type(sig), "box")
                 style = ', style="filled", fillcolor="#eeeeee"' if isinstance(sig, State) else ""
                 out.append(f'    {_node_id(sig.full_name)} [shape={shape}{style}, label="{sig.name}"];')
@@ -70,7 +70,7 @@ def to_mermaid(graph: Graph, signals: bool = False) -> str:
     else:
         for e in graph:
             out.append(f'  subgraph {_node_id(e.name)}["{e.name} ({e.type_name})"]')
-            for sig in e.signals.values():
+            for sig in e.ports.values():
                 left, right = ("([", "])") if isinstance(sig, Input) else ("[[", "]]") if isinstance(sig, State) else ("[", "]")
                 out.append(f'    {_node_id(sig.full_name)}{left}"{sig.name}"{right}')
             out.append("  end")

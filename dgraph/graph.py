@@ -28,7 +28,7 @@ class Graph:
 
     Attributes:
         t: the tick the loop is at (the device state is stamped ``t``).
-        record: names of the signals a recorder should log (from the graph file's ``record``).
+        duration: default run length in seconds (from the graph file), or None.
     """
 
     def __init__(self, dt: float = 0.001, name: str = "graph"):
@@ -38,7 +38,7 @@ class Graph:
         self.name = name
         self.clock = Clock()
         self.t = 0
-        self.record: list[str] = []
+        self.duration: float | None = None
         self._entities: dict[str, Entity] = {}
         self._roles: dict[str, list[Entity]] | None = None
 
@@ -63,7 +63,7 @@ class Graph:
     def remove(self, name: str) -> Entity:
         """Unplug every port of entity ``name`` and take it out of the graph."""
         entity = self.entity(name)
-        for sig in entity.signals.values():
+        for sig in entity.ports.values():
             if isinstance(sig, Input):
                 sig.unplug()
             elif isinstance(sig, Output):
@@ -180,9 +180,9 @@ class Graph:
         """
         g = nx.DiGraph()
         for entity in self:
-            for sig in entity.signals.values():
+            for sig in entity.ports.values():
                 g.add_node(sig.full_name, entity=entity.name, signal=sig.name, kind=type(sig).__name__)
-            for sig in entity.signals.values():
+            for sig in entity.ports.values():
                 if isinstance(sig, Input) and sig.source is not None:
                     g.add_edge(sig.source.full_name, sig.full_name, kind="plug")
                 if isinstance(sig, Output):

@@ -1,0 +1,129 @@
+"""Recorder: log chosen signals every tick to numpy columns (.npz) and to Rerun."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.recording.rerun_stream import RerunStream
+from dgraph.signals.signal import Signal
+
+
+def component_names(sig: Signal, shape: tuple[int, ...]) -> list[str]:
+    """Readable names of a signal's components: its labels, else ``name[i]`` / ``name[i,j]``."""
+    if shape == ():
+        return [sig.name]
+    if sig.spec.labels is not None and len(sig.spec.labels) == int(np.prod(shape)):
+        return [f"{sig.name}.{label}" for label in sig.spec.labels]
+    return [f"{sig.name}[{','.join(map(str, idx))}]" for idx in np.ndindex(*shape)]
+
+
+@dg.register
+class Recorder(dg.Entity):
+    """Records signals every tick, without changing what is computed.
+
+    At each tick, after the control is computed and before the states are committed, the
+    recorder reads each signal at ``t`` (a cached read, since the device has just pulled the
+    graph; a signal nobody else needs is computed as it would be on demand). Values go to
+    in-memory numpy columns, saved as ``.npz`` on :meth:`close` (keys ``tick``, ``time`` and
+    ``entity.signal``), and to Rerun as time series on the ``tick`` and ``time`` timelines,
+    one series per component, entity path ``signals/<entity>/<signal>``.
+
+    Parameters: ``signals`` (``entity.signal`` names), ``rerun`` (``off``, ``save``, ``spawn``,
+    ``serve``), ``rrd_path`` (for ``save``), ``npz_path``, ``decimation`` (log one tick in N to
+    Rerun), ``flush_every`` (ticks buffered before sending to Rerun).
+    """
+
+    observes = True
+    signals = dg.Param(kind="str_list", doc="names 'entity.signal' of the recorded signals")
+    rerun = dg.Param("off", kind="str", choices=("off", "save", "spawn", "serve"), doc="Rerun sink")
+    rrd_path = dg.Param(None, kind="str", doc=".rrd file written when rerun=save")
+    npz_path = dg.Param(None, kind="str", doc=".npz file written on close (default: none)")
+    decimation = dg.Param(1, kind="int", doc="send one tick in N to Rerun")
+    flush_every = dg.Param(200, kind="int", doc="ticks buffered before a Rerun send")
+
+    def configure(self) -> None:
+        """Check the parameters."""
+        if self.rerun == "save" and not self.rrd_path:
+            raise dg.ParamError(f"{self.name}: rerun=save needs rrd_path", entity=self.name)
+        if self.decimation < 1 or self.flush_every < 1:
+            raise dg.ParamError(f"{self.name}: decimation and flush_every must be >= 1", entity=self.name)
+        self._sources: list[Signal] | None = None
+        self.ticks: list[int] = []
+        self._columns: dict[str, list[Any]] = {name: [] for name in self.signals}
+        self._stream: RerunStream | None = None
+        self._pending = 0
+        self.closed = False
+
+    def check(self) -> list[str]:
+        """Every recorded name must be a signal of the graph."""
+        if self.graph is None:
+            return []
+        problems = []
+        for name in self.signals:
+            try:
+                self.graph.signal(name)
+            except dg.DGraphError as exc:
+                problems.append(f"recorded signal {name!r}: {exc}")
+        return problems
+
+    def _open(self) -> list[Signal]:
+        if self.graph is None:
+            raise dg.GraphError(f"{self.name}: a recorder must be in a graph", entity=self.name)
+        problems = self.check()
+        if problems:
+            raise dg.GraphError("; ".join(problems), entity=self.name)
+        self._sources = [self.graph.signal(name) for name in self.signals]
+        if self.rerun != "off":
+            self._stream = RerunStream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt)
+        return self._sources
+
+    def observe(self, t: int) -> None:
+        """Read every recorded signal at ``t`` and store the values."""
+        sources = self._sources if self._sources is not None else self._open()
+        self.ticks.append(t)
+        for name, sig in zip(self.signals, sources):
+            value = sig(t)
+            self._columns[name].append(value.copy() if isinstance(value, np.ndarray) else value)
+        if self._stream is not None:
+            self._pending += 1
+            if self._pending >= self.flush_every:
+                self._send()
+
+    def _send(self) -> None:
+        n = self._pending
+        self._pending = 0
+        if n == 0 or self._stream is None:
+            return
+        ticks = np.asarray(self.ticks[-n:])
+        keep = ticks % self.decimation == 0
+        if not keep.any():
+            return
+        for name, sig in zip(self.signals, self._sources or []):
+            values = np.asarray(self._columns[name][-n:], dtype=float)[keep]
+            shape = values.shape[1:]
+            self._stream.send(f"signals/{name.replace('.', '/')}", component_names(sig, shape),
+                              ticks[keep], values.reshape(len(values), -1))
+
+    def data(self) -> dict[str, np.ndarray]:
+        """The recording so far: ``tick``, ``time`` (s) and one array per signal (ticks first)."""
+        out = {"tick": np.asarray(self.ticks, dtype=np.int64)}
+        out["time"] = out["tick"] * (self.graph.dt if self.graph is not None else 1.0)
+        for name, values in self._columns.items():
+            out[name] = np.asarray(values) if values else np.zeros((0,))
+        return out
+
+    def close(self) -> None:
+        """Flush to Rerun, close the stream, write the .npz (idempotent)."""
+        if self.closed:
+            return
+        self.closed = True
+        if self._stream is not None:
+            self._send()
+            self._stream.close()
+        if self.npz_path:
+            Path(self.npz_path).parent.mkdir(parents=True, exist_ok=True)
+            np.savez(self.npz_path, **self.data())

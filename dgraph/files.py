@@ -1,0 +1,306 @@
+"""Graph files: YAML descriptions of graphs, loaded safely and written back identically.
+
+A graph file::
+
+    name: pd_double_integrator
+    dt: 0.001
+    entities:
+      robot: {type: KinematicDevice, params: {control_mode: acceleration, size: 1}}
+      kp:    {type: Gain, params: {size: 1}}
+    plugs:
+      - robot.q -> kp.input
+    set:
+      kp.gain: 25.0
+    record: [robot.q]          # shorthand for a Recorder entity named "recorder"
+
+Safety: the YAML is composed with the safe loader and converted node by node; only plain
+scalars, lists and mappings are accepted (no tags, anchors, aliases or merge keys), so a file
+can never construct objects or run code. Entity types come only from the registry. Every
+error is a :class:`~dgraph.errors.GraphFileError` carrying the file, line and key.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import numpy as np
+import yaml
+
+from dgraph.errors import DGraphError, GraphError, GraphFileError
+from dgraph.graph import Graph
+from dgraph.registry import get_type
+from dgraph.signals.signal import Input
+
+MAX_BYTES = 4 * 1024 * 1024
+SIGNAL_RE = r"^[A-Za-z_][A-Za-z0-9_\-]*\.[A-Za-z_][A-Za-z0-9_]*$"
+PLUG_RE = re.compile(r"^\s*(\S+)\s*->\s*(\S+)\s*$")
+RECORDER_NAME = "recorder"
+
+SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "additionalProperties": False,
+    "required": ["entities"],
+    "properties": {
+        "name": {"type": "string", "minLength": 1},
+        "dt": {"type": "number", "exclusiveMinimum": 0},
+        "duration": {"type": "number", "minimum": 0},
+        "entities": {
+            "type": "object",
+            "propertyNames": {"pattern": r"^[A-Za-z_][A-Za-z0-9_\-]*$"},
+            "additionalProperties": {
+                "type": "object",
+                "additionalProperties": False,
+                "required": ["type"],
+                "properties": {"type": {"type": "string"}, "params": {"type": "object"}},
+            },
+        },
+        "plugs": {"type": "array", "items": {"type": "string", "pattern": r"^\s*\S+\s*->\s*\S+\s*$"}},
+        "set": {"type": "object", "propertyNames": {"pattern": SIGNAL_RE}},
+        "record": {"type": "array", "items": {"type": "string", "pattern": SIGNAL_RE}},
+    },
+}
+
+_PLAIN_TAGS = {
+    "tag:yaml.org,2002:str", "tag:yaml.org,2002:int", "tag:yaml.org,2002:float",
+    "tag:yaml.org,2002:bool", "tag:yaml.org,2002:null",
+}
+
+
+class _Document:
+    """Plain data converted from YAML nodes, with the line of every path."""
+
+    def __init__(self, file: str):
+        self.file = file
+        self.lines: dict[tuple[Any, ...], int] = {}
+
+    def line(self, path: tuple[Any, ...]) -> int | None:
+        """The line of ``path``, or of its deepest known parent."""
+        while path not in self.lines and path:
+            path = path[:-1]
+        return self.lines.get(path)
+
+    def error(self, message: str, path: tuple[Any, ...]) -> GraphFileError:
+        """A :class:`GraphFileError` located at ``path``."""
+        key = ".".join(str(p) for p in path) or None
+        return GraphFileError(message, file=self.file, line=self.line(path), key=key)
+
+
+def _convert(doc: _Document, node: yaml.Node, path: tuple[Any, ...], seen: set[int],
+             loader: yaml.SafeLoader) -> Any:
+    if id(node) in seen:
+        raise doc.error("anchors and aliases are not allowed in graph files", path)
+    seen.add(id(node))
+    doc.lines[path] = node.start_mark.line + 1
+    if isinstance(node, yaml.MappingNode):
+        if node.tag != "tag:yaml.org,2002:map":
+            raise doc.error(f"tag {node.tag!r} is not allowed", path)
+        out: dict[str, Any] = {}
+        for key_node, value_node in node.value:
+            if not isinstance(key_node, yaml.ScalarNode) or key_node.tag not in _PLAIN_TAGS:
+                raise doc.error("mapping keys must be plain scalars (no merge keys or tags)", path)
+            key = str(loader.construct_object(key_node))
+            if key in out:
+                raise GraphFileError(f"duplicate key {key!r}", file=doc.file,
+                                     line=key_node.start_mark.line + 1, key=".".join(map(str, (*path, key))))
+            out[key] = _convert(doc, value_node, (*path, key), seen, loader)
+        return out
+    if isinstance(node, yaml.SequenceNode):
+        if node.tag != "tag:yaml.org,2002:seq":
+            raise doc.error(f"tag {node.tag!r} is not allowed", path)
+        return [_convert(doc, item, (*path, i), seen, loader) for i, item in enumerate(node.value)]
+    if node.tag not in _PLAIN_TAGS:
+        raise doc.error(f"tag {node.tag!r} is not allowed (only plain strings, numbers, booleans, null)", path)
+    return loader.construct_object(node)
+
+
+def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], _Document]:
+    """Parse and schema-check graph-file text; returns the data and its line map."""
+    doc = _Document(file)
+    if len(text) > MAX_BYTES:
+        raise GraphFileError(f"file larger than {MAX_BYTES} bytes", file=file)
+    loader = yaml.SafeLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            raise GraphFileError("the file is empty", file=file, line=1)
+        data = _convert(doc, node, (), set(), loader)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise GraphFileError(f"invalid YAML: {problem}", file=file,
+                             line=mark.line + 1 if mark else None) from None
+    except RecursionError:
+        raise GraphFileError("nesting too deep", file=file) from None
+    finally:
+        loader.dispose()
+    if not isinstance(data, dict):
+        raise GraphFileError("a graph file must be a mapping with an 'entities' key", file=file, line=1)
+    errors = sorted(jsonschema.Draft202012Validator(SCHEMA).iter_errors(data), key=lambda e: list(e.absolute_path))
+    if errors:
+        err = jsonschema.exceptions.best_match(errors)
+        raise doc.error(_schema_message(err), tuple(err.absolute_path))
+    return data, doc
+
+
+def _schema_message(err: jsonschema.ValidationError) -> str:
+    if err.validator == "additionalProperties":
+        return f"{err.message} (allowed keys: {', '.join(err.schema.get('properties', {}))})"
+    if err.validator == "pattern" and "->" in str(err.schema.get("pattern", "")):
+        return f"plug {err.instance!r} must read 'entity.output -> entity.input'"
+    if err.validator == "pattern":
+        return f"{err.instance!r} must read 'entity.signal'"
+    return err.message
+
+
+def load(path: str | Path, overrides: dict[str, Any] | None = None) -> Graph:
+    """Build the graph described by the file at ``path``.
+
+    ``overrides`` maps ``entity.name`` to a value: a parameter (applied before the entity is
+    built) or an input constant (set after the plugs), as ``dgraph run --set`` does.
+    """
+    file = str(path)
+    try:
+        raw = Path(path).read_bytes()
+        text = raw.decode("utf-8")
+    except OSError as exc:
+        raise GraphFileError(f"cannot read: {exc.strerror or exc}", file=file) from None
+    except UnicodeDecodeError as exc:
+        raise GraphFileError(f"not UTF-8 text: {exc.reason}", file=file) from None
+    return loads(text, file, overrides)
+
+
+def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = None) -> Graph:
+    """Build a graph from graph-file text (see :func:`load`)."""
+    data, doc = parse(text, file)
+    try:
+        return _build(data, doc, dict(overrides or {}))
+    except GraphFileError:
+        raise
+    except DGraphError as exc:  # anything the library refused, located at the file level
+        raise GraphFileError(str(exc), file=file, entity=exc.entity, signal=exc.signal) from exc
+
+
+def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> Graph:
+    graph = Graph(dt=data.get("dt", 0.001), name=data.get("name", Path(doc.file).stem or "graph"))
+    graph.duration = data.get("duration")
+    entities = declared_entities(data)
+    if "record" in data and RECORDER_NAME in data["entities"]:
+        raise doc.error(f"'record' creates an entity named {RECORDER_NAME!r}, which already exists", ("record",))
+    param_overrides, constants = _split_overrides(doc, entities, overrides)
+    for name, spec in entities.items():
+        params = {**(spec.get("params") or {}), **param_overrides.get(name, {})}
+        graph.add(_make_entity(doc, name, spec["type"], params, spec.get("_path")))
+    for i, plug in enumerate(data.get("plugs", [])):
+        source, target = PLUG_RE.match(plug).groups()
+        try:
+            graph.plug(source, target)
+        except DGraphError as exc:
+            raise doc.error(str(exc), ("plugs", i)) from None
+    for key, value in data.get("set", {}).items():
+        _set_constant(graph, doc, key, value, ("set", key))
+    for key, value in constants.items():
+        _set_constant(graph, doc, key, value, ())
+    for entity in graph:
+        problems = entity.check()
+        if problems:
+            raise doc.error("; ".join(problems), ("entities", entity.name))
+    return graph
+
+
+def declared_entities(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Entity specs of a parsed file, including the Recorder that ``record`` stands for."""
+    entities = dict(data["entities"])
+    if "record" in data:
+        entities[RECORDER_NAME] = {"type": "Recorder", "params": {"signals": data["record"]},
+                                   "_path": ("record",)}
+    return entities
+
+
+def _split_overrides(doc: _Document, entities: dict[str, Any], overrides: dict[str, Any]
+                     ) -> tuple[dict[str, dict[str, Any]], dict[str, Any]]:
+    """Sort ``entity.name=value`` overrides into parameters and input constants."""
+    params: dict[str, dict[str, Any]] = {}
+    constants: dict[str, Any] = {}
+    for key, value in overrides.items():
+        entity, _, name = key.partition(".")
+        if entity not in entities or not name:
+            raise doc.error(f"override {key!r}: no entity {entity!r} in the graph", ())
+        try:
+            is_param = name in get_type(entities[entity]["type"])._param_decls
+        except DGraphError as exc:
+            raise doc.error(str(exc), ("entities", entity, "type")) from None
+        if is_param:
+            params.setdefault(entity, {})[name] = value
+        else:
+            constants[key] = value
+    return params, constants
+
+
+def _make_entity(doc: _Document, name: str, type_name: str, params: dict[str, Any],
+                 path: tuple[Any, ...] | None = None) -> Any:
+    where = path or ("entities", name)
+    try:
+        cls = get_type(type_name)
+    except DGraphError as exc:
+        raise doc.error(str(exc), (*where, "type") if path is None else where) from None
+    try:
+        return cls(name, **params)
+    except DGraphError as exc:
+        raise doc.error(str(exc), (*where, "params") if path is None else where) from None
+    except Exception as exc:  # an entity constructor failing on odd values must not crash the loader
+        raise doc.error(f"{name} ({type_name}) could not be built: {type(exc).__name__}: {exc}",
+                        (*where, "params") if path is None else where) from None
+
+
+def _set_constant(graph: Graph, doc: _Document, key: str, value: Any, path: tuple[Any, ...]) -> None:
+    try:
+        sig = graph.signal(key)
+    except DGraphError as exc:
+        raise doc.error(str(exc), path) from None
+    if not isinstance(sig, Input):
+        raise doc.error(f"{key} is an output: only inputs (and parameters, with --set) can be set", path)
+    try:
+        sig.set(value)
+    except DGraphError as exc:
+        raise doc.error(str(exc), path) from None
+
+
+def to_plain(value: Any, where: str) -> Any:
+    """Convert a parameter or constant to YAML-safe plain data (lists, numbers, strings)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (np.floating, np.integer, np.bool_)):
+        return value.item()
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    if isinstance(value, (list, tuple)):
+        return [to_plain(v, where) for v in value]
+    raise GraphError(f"{where}: a {type(value).__name__} cannot be written to a graph file")
+
+
+def dumps(graph: Graph) -> str:
+    """The graph-file text of ``graph``."""
+    entities = {}
+    for e in graph:
+        spec: dict[str, Any] = {"type": e.type_name}
+        if e.given_params:
+            spec["params"] = {k: to_plain(v, f"{e.name}.{k}") for k, v in e.given_params.items()}
+        entities[e.name] = spec
+    data: dict[str, Any] = {"name": graph.name, "dt": graph.dt}
+    if graph.duration is not None:
+        data["duration"] = graph.duration
+    data |= {"entities": entities,
+                            "plugs": [f"{a} -> {b}" for a, b in graph.plugs()]}
+    constants = {inp.full_name: to_plain(inp.value, inp.full_name)
+                 for e in graph for inp in e.inputs.values() if inp.is_set}
+    if constants:
+        data["set"] = constants
+    return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+
+
+def save(graph: Graph, path: str | Path) -> None:
+    """Write ``graph`` to ``path`` as a graph file."""
+    Path(path).write_text(dumps(graph))
