@@ -184,11 +184,21 @@ class Output(Signal):
     # -- staleness --------------------------------------------------------------------------
     def invalidate(self) -> None:
         """Mark this output and everything downstream of it stale (stops at stale nodes)."""
-        if self._stale:
-            return
-        self._stale = True
-        if self._down:
-            _invalidate_all(self._down)
+        if not self._stale:
+            _invalidate_all([self])
+
+    def _defer(self) -> bool:
+        """A periodic output invalidated within its period holds its value: the change reaches
+        downstream only when the period has elapsed (:meth:`release_hold`). True if deferred."""
+        if self._time is None:
+            return False
+        clock = self._clock
+        if clock.t is not None and clock.t >= self._time + self.period:
+            return False
+        if not self._held:
+            self._held = True
+            clock.held.append(self)
+        return True
 
     @property
     def stale(self) -> bool:
@@ -212,13 +222,16 @@ class Output(Signal):
 
 
 def _invalidate_all(nodes: list[Output]) -> None:
-    """Iterative depth-first invalidation (no recursion limit on long chains)."""
+    """Mark ``nodes`` and their downstream stale, depth first without recursion (long chains
+    are fine), stopping at nodes already stale and at periodic outputs that hold."""
     stack = list(nodes)
     pop, extend = stack.pop, stack.extend
     while stack:
         node = pop()
         if not node._stale:
             node._stale = True
+            if node.period > 1 and node._defer():
+                continue
             if node._down:
                 extend(node._down)
 

@@ -1,0 +1,83 @@
+"""Small entities used across the tests (not registered: tests build them directly)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import dgraph as dg
+
+
+class Scale(dg.Entity):
+    """y = k * u (scalar), with a declared dependency on u only, and z reading y."""
+
+    k = dg.Param(2.0, kind="float")
+    u = dg.Input(shape=())
+    unused = dg.Input(shape=(), default=0.0)
+
+    @dg.output(shape=(), depends=("u",))
+    def y(self, t):
+        return self.k * self.u(t)
+
+    @dg.output(shape=(), depends=("y",))
+    def z(self, t):
+        return self.y(t) + 1.0
+
+
+class Sum2(dg.Entity):
+    """s = a + b, no declared dependencies (conservative default)."""
+
+    a = dg.Input(shape=())
+    b = dg.Input(shape=(), default=0.0)
+
+    @dg.output(shape=())
+    def s(self, t):
+        return self.a(t) + self.b(t)
+
+
+class Ticker(dg.Device):
+    """A device whose state x counts ticks: x(t) = x0 + t."""
+
+    x0 = dg.Param(0.0, kind="float")
+    x = dg.State(shape=())
+
+    def reset(self):
+        self.x.set(self.x0, 0)
+
+    def prepare_state(self, t):
+        self._next = self.x(t) + 1.0
+
+    def commit_state(self, t_next):
+        self.x.set(self._next, t_next)
+
+
+class Clocked(dg.Entity):
+    """Time-varying output: value = t (reads nothing)."""
+
+    @dg.output(shape=(), depends=("t",))
+    def now(self, t):
+        return float(t)
+
+
+class Periodic(dg.Entity):
+    """y = u, recomputed at most every `every` ticks."""
+
+    every = dg.Param(1, kind="int")
+    u = dg.Input(shape=())
+
+    def configure(self):
+        self.declare("y", dg.Output(_copy_u, shape=(), depends=("u",), period=self.every))
+
+
+def _copy_u(entity, t):
+    return entity.u(t)
+
+
+@pytest.fixture
+def graph():
+    return dg.Graph(dt=0.01, name="test")
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(0)

@@ -1,0 +1,260 @@
+"""The signal contract of docs/design.md, one test (or more) per line of it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import Clocked, Periodic, Scale, Sum2, Ticker
+
+import dgraph as dg
+
+
+def test_outputs_are_lazy_and_computed_once_per_tick(graph):
+    a = graph.add(Scale("a"))
+    a.u.set(3.0)
+    assert a.y.count == 0 and a.y.value is None and a.y.time is None
+    assert a.y(0) == 6.0
+    assert a.y(0) == 6.0
+    assert a.y.count == 1 and a.y.time == 0 and a.y.value == 6.0
+
+
+def test_diamond_computes_its_top_once_per_tick(graph):
+    dev = graph.add(Ticker("dev"))
+    top = graph.add(Scale("top"))
+    left, right = graph.add(Scale("left"), Scale("right"))
+    bottom = graph.add(Sum2("bottom"))
+    graph.plug("dev.x", "top.u")
+    graph.plug("top.y", "left.u")
+    graph.plug("top.y", "right.u")
+    graph.plug("left.y", "bottom.a")
+    graph.plug("right.y", "bottom.b")
+    for t in range(5):
+        assert bottom.s(t) == 8.0 * dev.x(t)
+        dev.increment()
+    assert top.y.count == 5 and left.y.count == 5 and bottom.s.count == 5
+
+
+def test_constant_only_chain_computes_once_until_a_constant_changes(graph):
+    a, b = graph.add(Scale("a"), Scale("b"))
+    graph.plug("a.y", "b.u")
+    a.u.set(1.0)
+    for t in range(10):
+        assert b.y(t) == 4.0
+    assert (a.y.count, b.y.count) == (1, 1)
+    a.u.set(2.0)
+    for t in range(10, 20):
+        assert b.y(t) == 8.0
+    assert (a.y.count, b.y.count) == (2, 2)
+
+
+def test_setting_an_undeclared_input_does_not_invalidate(graph):
+    a = graph.add(Scale("a"))
+    a.u.set(1.0)
+    a.y(0)
+    a.unused.set(5.0)  # y declares depends=("u",)
+    a.y(1)
+    assert a.y.count == 1
+
+
+def test_no_declaration_means_depending_on_every_input(graph):
+    s = graph.add(Sum2("s"))
+    s.a.set(1.0)
+    s.s(0)
+    s.b.set(2.0)
+    assert s.s(0) == 3.0 and s.s.count == 2
+
+
+def test_output_to_output_dependency_inside_an_entity(graph):
+    a = graph.add(Scale("a"))
+    a.u.set(1.0)
+    assert a.z(0) == 3.0
+    a.u.set(2.0)
+    assert a.z(0) == 5.0 and a.z.count == 2 and a.y.count == 2
+
+
+def test_device_state_changes_every_tick_and_triggers_recomputation(graph):
+    dev = graph.add(Ticker("dev", x0=10.0))
+    a = graph.add(Scale("a"))
+    graph.plug("dev.x", "a.u")
+    values = []
+    for _ in range(4):
+        values.append(a.y(graph.t))
+        graph.step()
+    assert values == [20.0, 22.0, 24.0, 26.0]
+    assert a.y.count == 4
+    assert dev.x.time == 4 and dev.x.value == 14.0
+
+
+def test_state_is_stamped_t_plus_one_after_control_at_t(graph):
+    dev = graph.add(Ticker("dev"))
+    assert dev.x.time == 0
+    dev.increment()
+    assert dev.x.time == 1 and graph.t == 1
+
+
+def test_time_varying_output_recomputes_at_each_new_tick_only(graph):
+    c = graph.add(Clocked("c"))
+    for t in range(3):
+        assert c.now(t) == t
+        assert c.now(t) == t
+    assert c.now.count == 3
+    downstream = graph.add(Scale("d"))
+    graph.plug("c.now", "d.u")
+    assert downstream.y(7) == 14.0 and downstream.y(8) == 16.0
+
+
+def test_period_n_recomputes_at_most_every_n_ticks_and_releases_downstream(graph):
+    graph.add(Ticker("dev"))
+    p = graph.add(Periodic("p", every=5))
+    d = graph.add(Scale("d"))
+    graph.plug("dev.x", "p.u")
+    graph.plug("p.y", "d.u")
+    seen = []
+    for _ in range(12):
+        seen.append(d.y(graph.t))
+        graph.step()
+    # p samples the ticker at 0, 5 and 10 and holds in between; d follows each new sample
+    assert seen == [0.0] * 5 + [10.0] * 5 + [20.0] * 2
+    assert p.y.count == 3
+    assert d.y.count == 3
+
+
+def test_period_hold_is_released_even_if_nothing_else_pulls(graph):
+    graph.add(Ticker("dev"))
+    p = graph.add(Periodic("p", every=3))
+    graph.plug("dev.x", "p.u")
+    d = graph.add(Scale("d"))
+    graph.plug("p.y", "d.u")
+    d.y(0)
+    for _ in range(3):
+        graph.step()
+    # at t=3 the hold has expired: the new value is computed on read
+    assert d.y(3) == 6.0
+
+
+def test_invalid_period_is_refused():
+    with pytest.raises(dg.SpecError):
+        dg.Output(lambda e, t: 0.0, period=0)
+
+
+def test_reading_at_an_earlier_tick_recomputes(graph):
+    c = graph.add(Clocked("c"))
+    assert c.now(5) == 5.0
+    assert c.now(2) == 2.0
+
+
+def test_plug_and_unplug_invalidate_and_unplug_falls_back_to_default(graph):
+    a, s = graph.add(Scale("a"), Sum2("s"))
+    a.u.set(1.0)
+    s.a.set(1.0)
+    graph.plug("a.y", "s.b")
+    assert s.s(0) == 3.0
+    graph.unplug("s.b")
+    assert s.b.source is None
+    assert s.s(0) == 1.0
+
+
+def test_constant_overrides_plug_and_plug_overrides_constant(graph):
+    a, b = graph.add(Scale("a"), Scale("b"))
+    a.u.set(1.0)
+    graph.plug("a.y", "b.u")
+    b.u.set(10.0)
+    assert b.u.source is None and b.y(0) == 20.0
+    graph.plug("a.y", "b.u")
+    assert not b.u.is_set and b.y(0) == 4.0
+
+
+def test_cache_disabled_recomputes_every_read(graph):
+    a = graph.add(Scale("a"))
+    a.u.set(1.0)
+    graph.cache_enabled = False
+    a.y(0)
+    a.y(0)
+    assert a.y.count == 2
+    graph.cache_enabled = True
+    a.y(0)
+    a.y(0)
+    assert a.y.count == 3
+
+
+def test_unplugged_input_error_names_the_signal(graph):
+    a = graph.add(Scale("a"))
+    with pytest.raises(dg.UnpluggedInputError, match=r"a\.u") as info:
+        a.y(0)
+    assert info.value.entity == "a" and info.value.signal == "u"
+
+
+def test_set_checks_shape_dtype_and_nan(graph):
+    a = graph.add(Scale("a"))
+    with pytest.raises(dg.SpecError, match=r"a\.u"):
+        a.u.set([1.0, 2.0])
+    with pytest.raises(dg.SpecError, match="NaN"):
+        a.u.set(float("nan"))
+    with pytest.raises(dg.SpecError):
+        a.u.set("text")
+    assert a.u.value is None  # nothing half-set
+
+
+def test_computed_nan_and_wrong_shape_are_reported_with_the_signal(graph):
+    class Bad(dg.Entity):
+        mode = dg.Param("nan", kind="str")
+
+        @dg.output(shape=(2,), depends=())
+        def y(self, t):
+            return np.array([np.nan, 0.0]) if self.mode == "nan" else np.zeros(3)
+
+    with pytest.raises(dg.SpecError, match=r"bad\.y at tick 0: computed a value containing NaN"):
+        graph.add(Bad("bad")).y(0)
+    with pytest.raises(dg.SpecError, match=r"shape \(3,\)"):
+        graph.add(Bad("bad2", mode="shape")).y(0)
+    graph.check_values = False
+    assert graph["bad2.y"](1).shape == (3,)
+
+
+def test_compute_exceptions_are_wrapped_with_entity_and_signal(graph):
+    class Boom(dg.Entity):
+        @dg.output(shape=(), depends=())
+        def y(self, t):
+            raise ZeroDivisionError("nope")
+
+    b = graph.add(Boom("boom"))
+    with pytest.raises(dg.ComputeError, match=r"boom\.y failed at tick 3: ZeroDivisionError") as info:
+        b.y(3)
+    assert isinstance(info.value.__cause__, ZeroDivisionError)
+    assert info.value.signal == "y"
+
+
+def test_reentrant_read_is_reported(graph):
+    class Loop(dg.Entity):
+        @dg.output(shape=(), depends=())
+        def y(self, t):
+            return self.y(t)
+
+    with pytest.raises(dg.ComputeError, match="during its own computation"):
+        graph.add(Loop("loop")).y(0)
+
+
+def test_value_and_time_never_compute(graph):
+    a = graph.add(Scale("a"))
+    a.u.set(1.0)
+    assert a.y.value is None
+    a.y(4)
+    a.u.set(3.0)
+    assert a.y.value == 2.0 and a.y.time == 4 and a.y.stale
+    assert a.u.value == 3.0
+
+
+def test_class_level_template_cannot_be_read():
+    with pytest.raises(dg.DGraphError, match="class-level"):
+        Scale.u(0)
+
+
+def test_invalidation_has_no_recursion_limit(graph):
+    dev = graph.add(Ticker("dev"))
+    prev = dev.x
+    for i in range(3000):
+        e = graph.add(Scale(f"s{i}", k=1.0))
+        graph.plug(prev, e.u)
+        prev = e.y
+    dev.increment()  # invalidates a 3000-long chain iteratively
+    assert prev.stale

@@ -1,0 +1,89 @@
+"""Spec: coercion of set values, checks of computed values, plug compatibility."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from dgraph.errors import SpecError
+from dgraph.signals.spec import Spec, resolve_shape
+
+
+def test_scalar_float_coercion():
+    spec = Spec((), "float")
+    assert spec.coerce(3, "x") == 3.0 and type(spec.coerce(np.float32(1.5), "x")) is float
+    for bad in ("1", None, [1.0], float("nan")):
+        with pytest.raises(SpecError, match="x"):
+            spec.coerce(bad, "x")
+
+
+def test_vector_coercion_copies_and_checks_shape():
+    spec = Spec((3,), "float")
+    src = np.zeros(3)
+    out = spec.coerce(src, "v")
+    src[0] = 1.0
+    assert out[0] == 0.0
+    with pytest.raises(SpecError, match=r"shape \(2,\)"):
+        spec.coerce([1.0, 2.0], "v")
+    with pytest.raises(SpecError, match="NaN"):
+        spec.coerce([1.0, np.nan, 0.0], "v")
+
+
+def test_wildcard_dimensions_and_any_shape():
+    assert Spec((None, 2)).coerce(np.zeros((5, 2)), "m").shape == (5, 2)
+    assert Spec(None).coerce(2, "s") == 2.0
+    assert Spec(None).coerce([[1, 2]], "s").shape == (1, 2)
+
+
+def test_int_and_bool():
+    assert Spec((), "int").coerce(3.0, "i") == 3
+    with pytest.raises(SpecError):
+        Spec((), "int").coerce(3.5, "i")
+    with pytest.raises(SpecError):
+        Spec((), "int").coerce(True, "i")
+    assert Spec((), "bool").coerce(True, "b") is True
+    with pytest.raises(SpecError):
+        Spec((), "bool").coerce(2, "b")
+
+
+def test_plug_compatibility():
+    assert Spec((3,)).accepts(Spec((3,)))
+    assert not Spec((3,)).accepts(Spec((4,)))
+    assert not Spec((3,)).accepts(Spec(()))
+    assert Spec((None,)).accepts(Spec((7,)))
+    assert Spec(None).accepts(Spec((2, 2)))
+    assert Spec((), "float").accepts(Spec((), "int"))
+    assert not Spec((), "int").accepts(Spec((), "float"))
+    assert Spec((3,), "object").accepts(Spec((3,), "float"))
+
+
+def test_check_of_computed_values():
+    Spec((2,)).check(np.zeros(2), "y")
+    with pytest.raises(SpecError, match="computed shape"):
+        Spec((2,)).check(np.zeros(3), "y")
+    with pytest.raises(SpecError, match="computed a scalar"):
+        Spec((2,)).check(1.0, "y")
+    with pytest.raises(SpecError, match="NaN"):
+        Spec(()).check(float("nan"), "y")
+    Spec((), "object").check(object(), "y")
+
+
+def test_resolve_shape_from_owner_attributes():
+    class Owner:
+        n = 4
+
+    assert resolve_shape(("n", 3), Owner()) == (4, 3)
+    assert resolve_shape("n", Owner()) == (4,)
+    assert resolve_shape(lambda o: (o.n,), Owner()) == (4,)
+    assert resolve_shape(None, Owner()) is None
+    with pytest.raises(SpecError):
+        resolve_shape((-1,), Owner())
+
+
+def test_unknown_dtype():
+    with pytest.raises(SpecError):
+        Spec((), "complex")
+
+
+def test_repr():
+    assert repr(Spec((3,))) == "float(3,)" and repr(Spec((None, 2), "int")) == "int(*, 2)"
