@@ -100,7 +100,8 @@ def _convert(doc: _Document, node: yaml.Node, path: tuple[Any, ...], seen: set[i
         out: dict[str, Any] = {}
         for key_node, value_node in node.value:
             if not isinstance(key_node, yaml.ScalarNode) or key_node.tag not in _PLAIN_TAGS:
-                raise doc.error("mapping keys must be plain scalars (no merge keys or tags)", path)
+                raise GraphFileError("mapping keys must be plain scalars (no merge keys or tags)", file=doc.file,
+                                     line=key_node.start_mark.line + 1, key=".".join(map(str, path)) or None)
             key = str(loader.construct_object(key_node))
             if key in out:
                 raise GraphFileError(f"duplicate key {key!r}", file=doc.file,
@@ -121,8 +122,9 @@ def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], _Document]
     doc = _Document(file)
     if len(text) > MAX_BYTES:
         raise GraphFileError(f"file larger than {MAX_BYTES} bytes", file=file)
-    loader = yaml.SafeLoader(text)
+    loader = None
     try:
+        loader = yaml.SafeLoader(text)
         node = loader.get_single_node()
         if node is None:
             raise GraphFileError("the file is empty", file=file, line=1)
@@ -135,7 +137,8 @@ def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], _Document]
     except RecursionError:
         raise GraphFileError("nesting too deep", file=file) from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
     if not isinstance(data, dict):
         raise GraphFileError("a graph file must be a mapping with an 'entities' key", file=file, line=1)
     errors = sorted(jsonschema.Draft202012Validator(SCHEMA).iter_errors(data), key=lambda e: list(e.absolute_path))

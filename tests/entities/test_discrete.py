@@ -1,0 +1,50 @@
+"""Delay, Integrator and Sinusoid."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import Ticker
+
+import dgraph as dg
+from dgraph.entities.discrete import Delay, Integrator
+from dgraph.entities.references import Sinusoid
+
+
+def test_delay_outputs_the_previous_input(graph):
+    dev = graph.add(Ticker("dev", x0=5.0))
+    d = graph.add(Delay("d", initial=-1.0))
+    graph.plug("dev.x", "d.input")
+    seen = []
+    for _ in range(4):
+        seen.append((dev.x(graph.t), d.output(graph.t)))
+        graph.step()
+    assert seen == [(5.0, -1.0), (6.0, 5.0), (7.0, 6.0), (8.0, 7.0)]
+
+
+def test_delay_initial_value_must_fit():
+    with pytest.raises(dg.ParamError, match="does not fit size 3"):
+        Delay("d", size=3, initial=[1.0, 2.0])
+
+
+def test_integrator_forward_euler(graph):
+    graph.add(Ticker("dev"))
+    i = graph.add(Integrator("i", size=2, initial=[1.0, 0.0]))
+    i.input.set([1.0, -2.0])
+    graph.run(ticks=100)  # dt = 0.01 -> 1 s
+    assert np.allclose(i.output.value, [2.0, -2.0])
+    assert i.output.time == 100
+
+
+def test_sinusoid_and_derivatives(graph):
+    s = graph.add(Sinusoid("s", amplitude=[0.0, 0.05, 0.0], frequency=0.5, offset=[0.1, 0.0, 0.9]))
+    t = 50  # 0.5 s at dt = 0.01
+    w = 2 * np.pi * 0.5
+    assert np.allclose(s.output(t), [0.1, 0.05 * np.sin(w * 0.5), 0.9])
+    assert np.allclose(s.velocity(t), [0.0, 0.05 * w * np.cos(w * 0.5), 0.0])
+    assert np.allclose(s.acceleration(t), [0.0, -0.05 * w**2 * np.sin(w * 0.5), 0.0])
+    # finite differences agree with the analytic velocity
+    fd = (s.output(t + 1) - s.output(t - 1)) / (2 * graph.dt)
+    assert np.allclose(fd, s.velocity(t), atol=1e-5)
+    scalar = graph.add(Sinusoid("x", amplitude=2.0, frequency=1.0, phase=np.pi / 2))
+    assert scalar.output(0) == pytest.approx(2.0) and isinstance(scalar.output(0), float)

@@ -1,0 +1,76 @@
+"""Glue operators: Constant, Add, Gain, Selector, Switch, Saturation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import dgraph as dg
+from dgraph.entities.operators import Add, Constant, Gain, Saturation, Selector, Switch
+
+
+def test_constant_scalar_vector_matrix(graph):
+    assert graph.add(Constant("s", value=2)).output(0) == 2.0
+    v = graph.add(Constant("v", value=[1, 2, 3]))
+    assert v.output.spec.shape == (3,) and np.array_equal(v.output(0), [1, 2, 3])
+    m = graph.add(Constant("m", value=[[1, 0], [0, 1]]))
+    assert m.output.spec.shape == (2, 2)
+    for t in range(5):
+        v.output(t)
+    assert v.output.count == 1
+
+
+def test_add_weighted_sum(graph):
+    a = graph.add(Add("a", n_inputs=3, coefficients=[1, -2, 0.5], size=2))
+    a.in0.set([1, 1])
+    a.in1.set([1, 0])
+    a.in2.set([2, 2])
+    assert np.allclose(a.output(0), [0.0, 2.0])
+    with pytest.raises(dg.ParamError, match="2 coefficients for 3 inputs"):
+        Add("b", n_inputs=3, coefficients=[1, 1])
+
+
+def test_gain_scalar_diagonal_matrix(graph):
+    g = graph.add(Gain("g", size=2))
+    g.input.set([1.0, 2.0])
+    assert np.allclose(g.output(0), [1.0, 2.0])
+    g.gain.set(3.0)
+    assert np.allclose(g.output(0), [3.0, 6.0])
+    g.gain.set([1.0, -1.0])
+    assert np.allclose(g.output(0), [1.0, -2.0])
+    g.gain.set([[0.0, 1.0], [1.0, 0.0]])
+    assert np.allclose(g.output(0), [2.0, 1.0])
+
+
+def test_selector(graph):
+    s = graph.add(Selector("s", size=4, indices=[3, 0]))
+    s.input.set([10, 11, 12, 13])
+    assert np.array_equal(s.output(0), [13, 10]) and s.output.spec.shape == (2,)
+    with pytest.raises(dg.ParamError, match="invalid for size 4"):
+        Selector("bad", size=4, indices=[4])
+
+
+def test_switch_evaluates_only_the_selected_input(graph):
+    sw = graph.add(Switch("sw"))
+    sw.in1.set(5.0)  # in0 is unplugged: fine while not selected
+    sw.selection.set(1)
+    assert sw.output(0) == 5.0
+    sw.selection.set(0)
+    with pytest.raises(dg.UnpluggedInputError, match=r"sw\.in0"):
+        sw.output(1)
+    sw.selection.set(7)
+    with pytest.raises(dg.ComputeError, match="selection = 7"):
+        sw.output(2)
+
+
+def test_saturation(graph):
+    s = graph.add(Saturation("s", size=3))
+    s.input.set([-5.0, 0.5, 5.0])
+    s.lower.set(-1.0)
+    s.upper.set([1.0, 0.2, 2.0])
+    assert np.allclose(s.output(0), [-1.0, 0.2, 2.0])
+    scalar = graph.add(Saturation("x"))
+    scalar.input.set(3.0)
+    assert scalar.output(0) == 3.0
+    scalar.upper.set(1.0)
+    assert scalar.output(0) == 1.0

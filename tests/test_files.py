@@ -1,0 +1,198 @@
+"""Graph files: load, save, fixed point, and every kind of bad file."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import dgraph as dg
+from dgraph.files import dumps, loads
+
+ROOT = Path(__file__).resolve().parents[1]
+PD = ROOT / "graphs" / "pd_double_integrator.yaml"
+
+GOOD = """\
+name: small
+dt: 0.01
+entities:
+  dev: {type: KinematicDevice, params: {size: 2}}
+  k:
+    type: Gain
+    params: {size: 2}
+plugs:
+  - dev.q -> k.input
+set:
+  k.gain: 2.0
+"""
+
+
+def test_load_builds_the_described_graph():
+    g = dg.load(PD)
+    assert g.name == "pd_double_integrator" and g.dt == 0.001 and g.duration == 3.0
+    assert set(g.entities) == {"robot", "setpoint", "error", "kp", "kd", "command", "recorder"}
+    assert ("command.output", "robot.control") in g.plugs()
+    assert g["kp.gain"].value == 25.0 and g["recorder"].signals[0] == "robot.q"
+    g.validate()
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "graphs").glob("*.yaml")), ids=lambda p: p.name)
+def test_load_save_load_is_a_fixed_point(path, tmp_path):
+    first = dg.load(path)
+    dg.save(first, tmp_path / "a.yaml")
+    second = dg.load(tmp_path / "a.yaml")
+    dg.save(second, tmp_path / "b.yaml")
+    assert (tmp_path / "a.yaml").read_text() == (tmp_path / "b.yaml").read_text()
+    assert first.plugs() == second.plugs() and list(first.entities) == list(second.entities)
+    for name, e in first.entities.items():
+        assert second[name].type_name == e.type_name
+        for key, value in e.params.items():
+            assert np.array_equal(np.asarray(second[name].params[key], dtype=object), np.asarray(value, dtype=object))
+
+
+def test_a_saved_graph_runs_the_same(tmp_path):
+    a = dg.load(PD)
+    dg.save(a, tmp_path / "copy.yaml")
+    b = dg.load(tmp_path / "copy.yaml")
+    for g in (a, b):
+        g.run(ticks=500)
+    assert np.array_equal(a["robot.q"].value, b["robot.q"].value)
+
+
+def test_overrides_set_parameters_and_constants():
+    g = loads(GOOD, overrides={"dev.q0": [1.0, 2.0], "k.gain": 3.0})
+    assert np.array_equal(g["dev.q"].value, [1.0, 2.0]) and g["k.gain"].value == 3.0
+    with pytest.raises(dg.GraphFileError, match="no entity 'nope'"):
+        loads(GOOD, overrides={"nope.x": 1})
+
+
+def test_unsaveable_parameter_is_reported():
+    import pinocchio as pin
+
+    g = dg.Graph()
+    g.add(dg.get_type("KinematicDevice")("dev", model=pin.buildSampleModelHumanoidRandom()))
+    with pytest.raises(dg.GraphError, match=r"dev\.model: a Model cannot be written"):
+        dumps(g)
+
+
+BAD_FILES = [
+    # (text, line, message fragment)
+    (GOOD.replace("type: Gain", "type: Gian"), 6, "unknown entity type 'Gian'; did you mean Gain"),
+    (GOOD.replace("params: {size: 2}\nplugs", "params: {size: 2, gain: 1}\nplugs"), 7, "unknown parameter(s) gain"),
+    (GOOD.replace("params: {size: 2}}", "params: {size: two}}"), 4, "parameter 'size': expected an int"),
+    (GOOD.replace("dev.q -> k.input", "dev.qq -> k.input"), 9, "has no signal 'qq'"),
+    (GOOD.replace("dev.q -> k.input", "dev.q => k.input"), 9, "must read 'entity.output -> entity.input'"),
+    (GOOD.replace("k.gain: 2.0", "k.output: 2.0"), 11, "k.output is an output"),
+    (GOOD.replace("k.gain: 2.0", "k.gain: abc"), 11, "k.gain: cannot convert 'abc'"),
+    (GOOD.replace("k.gain: 2.0", "k.gain: .nan"), 11, "NaN"),
+    (GOOD.replace("{size: 2}}", "{size: 3}}", 1), 9, "shape or dtype mismatch"),
+    (GOOD + "extra: 1\n", 1, "Additional properties are not allowed ('extra'"),
+    (GOOD.replace("dt: 0.01", "dt: -1"), 2, "dt"),
+    (GOOD.replace("  k:\n", "  dev:\n"), 5, "duplicate key 'dev'"),
+    ("entities: {a: {type: Gain}\n", 2, "invalid YAML"),
+    ("- just\n- a list\n", 1, "must be a mapping"),
+    ("", 1, "empty"),
+    ("name: x\n", 1, "'entities' is a required property"),
+    ("entities:\n  a: !!python/object/apply:os.system ['true']\n", 2, "tag"),
+    ("entities:\n  a: &x {type: Gain}\n  b: *x\n", 2, "anchors and aliases"),
+    ("entities:\n  a: {type: Gain}\n  <<: {b: 1}\n", 3, "merge keys"),
+    ("entities: {}\nset: {'a.b': !custom 1}\n", 2, "tag"),
+    (GOOD.replace("plugs:\n  - dev.q -> k.input", "plugs:\n  - k.output -> k.input"), 9, "closes a loop"),
+]
+
+
+@pytest.mark.parametrize(("text", "line", "fragment"), BAD_FILES)
+def test_bad_files_give_file_line_and_reason(text, line, fragment, tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    with pytest.raises(dg.GraphFileError) as info:
+        dg.load(path)
+    assert info.value.file == str(path)
+    assert info.value.line == line, str(info.value)
+    assert fragment in str(info.value)
+    assert str(info.value).startswith(f"{path}:{line}")
+
+
+def test_unreadable_files(tmp_path):
+    with pytest.raises(dg.GraphFileError, match="cannot read"):
+        dg.load(tmp_path / "missing.yaml")
+    (tmp_path / "latin1.yaml").write_bytes(b"name: caf\xe9\n")
+    with pytest.raises(dg.GraphFileError, match="not UTF-8"):
+        dg.load(tmp_path / "latin1.yaml")
+    with pytest.raises(dg.GraphFileError, match="nesting too deep|invalid YAML"):
+        loads("entities: " + "[" * 5000 + "]" * 5000)
+
+
+def test_no_code_runs_from_a_file(tmp_path):
+    marker = tmp_path / "pwned"
+    attacks = [
+        f"entities: !!python/object/apply:os.system ['touch {marker}']\n",
+        f"entities:\n  a: {{type: !!python/name:os.system , params: {{}}}}\nx: !!python/object/new:os.system ['touch {marker}']\n",
+        "entities:\n  a: {type: '__import__(\"os\").system'}\n",
+        "entities:\n  a: {type: dgraph.files.os.system}\n",
+    ]
+    for text in attacks:
+        with pytest.raises(dg.GraphFileError):
+            loads(text)
+    assert not marker.exists()
+
+
+VALID_LINES = GOOD.splitlines(keepends=True)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.text(max_size=300))
+def test_fuzz_random_text_gives_only_graph_file_errors(text):
+    try:
+        loads(text)
+    except dg.GraphFileError:
+        pass
+
+
+yaml_scalar = st.one_of(st.none(), st.booleans(), st.integers(-10**6, 10**6), st.floats(allow_nan=True),
+                        st.text(max_size=12))
+yaml_value = st.recursive(yaml_scalar, lambda inner: st.one_of(
+    st.lists(inner, max_size=4), st.dictionaries(st.text(max_size=8), inner, max_size=4)), max_leaves=12)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, len(VALID_LINES) - 1), st.text(max_size=40), st.sampled_from(["replace", "insert", "delete"]))
+def test_fuzz_mutated_valid_file(index, fragment, how):
+    lines = list(VALID_LINES)
+    if how == "replace":
+        lines[index] = fragment + "\n"
+    elif how == "insert":
+        lines.insert(index, fragment + "\n")
+    else:
+        del lines[index]
+    try:
+        loads("".join(lines))
+    except dg.GraphFileError:
+        pass
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(["Gain", "Add", "Constant", "KinematicDevice", "Sinusoid", "Selector", "Switch",
+                        "Delay", "Integrator", "Saturation", "Recorder"]),
+       st.dictionaries(st.sampled_from(["size", "value", "n_inputs", "coefficients", "indices", "amplitude",
+                                        "frequency", "initial", "control_mode", "signals", "rerun", "model",
+                                        "q0", "dt", "period"]), yaml_value, max_size=4),
+       yaml_value)
+def test_fuzz_structured_params_and_values(type_name, params, value):
+    import yaml
+
+    doc = {"entities": {"e": {"type": type_name, "params": params}}, "set": {"e.input": value}}
+    try:
+        loads(yaml.safe_dump(doc))
+    except dg.GraphFileError:
+        pass
+
+
+def test_environment_is_untouched_by_loading():
+    before = dict(os.environ)
+    dg.load(PD)
+    assert dict(os.environ) == before

@@ -1,0 +1,125 @@
+"""The device loop: hook order, failures that leave the state consistent, run lengths."""
+
+from __future__ import annotations
+
+import pytest
+from conftest import Scale, Ticker
+
+import dgraph as dg
+
+
+def test_tick_order_before_control_commit_after(graph):
+    events = []
+    dev = graph.add(Ticker("dev"))
+    a = graph.add(Scale("a"))
+    graph.plug("dev.x", "a.u")
+
+    class Spy(dg.Entity):
+        observes = True
+
+        def observe(self, t):
+            events.append(("observe", t, dev.x.time))
+
+    graph.add(Spy("spy"))
+    dev.before.add(lambda t: events.append(("before", t, dev.x.time)))
+    dev.after.add(lambda t: events.append(("after", t, dev.x.time)))
+    dev.after.add(a.y)  # a signal hook is pulled at t + 1
+    graph.step()
+    assert events == [("before", 0, 0), ("observe", 0, 0), ("after", 1, 1)]
+    assert a.y.time == 1 and a.y.value == 2.0
+
+
+def test_hooks_keep_explicit_order(graph):
+    dev = graph.add(Ticker("dev"))
+    order = []
+    dev.before.add(lambda t: order.append("b"))
+    dev.before.add(lambda t: order.append("a"), index=0)
+    dev.before.add(lambda t: order.append("c"))
+    graph.step()
+    assert order == ["a", "b", "c"] and len(dev.before) == 3
+
+
+def test_failing_before_hook_leaves_state_untouched_and_names_the_hook(graph):
+    dev = graph.add(Ticker("dev", x0=1.0))
+    calls = {"n": 0}
+
+    def flaky(t):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            raise RuntimeError("sensor timeout")
+
+    dev.before.add(flaky)
+    graph.step()
+    with pytest.raises(dg.HookError, match=r"before hook .*flaky of device dev failed at tick 1: RuntimeError") as info:
+        graph.step()
+    assert isinstance(info.value.__cause__, RuntimeError)
+    assert graph.t == 1 and dev.x.value == 2.0 and dev.x.time == 1  # not advanced, not corrupted
+    graph.step()  # the loop resumes
+    assert graph.t == 2 and dev.x.value == 3.0
+
+
+def test_failing_signal_hook_names_its_entity(graph):
+    dev = graph.add(Ticker("dev"))
+    a = graph.add(Scale("a"))  # u unplugged: pulling it fails
+    dev.after.add(a.y)
+    with pytest.raises(dg.HookError, match=r"after hook a\.y of device dev") as info:
+        graph.step()
+    assert info.value.entity == "a" and info.value.signal == "y"
+    assert graph.t == 1 and dev.x.time == 1  # committed before the after hooks
+
+
+def test_failure_while_pulling_control_commits_nothing(graph):
+    graph.add(Ticker("first"))
+
+    class Follower(dg.Device):
+        u = dg.Input(shape=())
+        s = dg.State(shape=(), initial=0.0)
+
+        def prepare_state(self, t):
+            self._next = self.u(t)
+
+        def commit_state(self, t_next):
+            self.s.set(self._next, t_next)
+
+    graph.add(Follower("second"))
+    with pytest.raises(dg.UnpluggedInputError, match=r"second\.u"):
+        graph.step()
+    assert graph["first.x"].time == 0 and graph.t == 0
+
+
+def test_standalone_device_increment():
+    dev = Ticker("dev")
+    order = []
+    dev.before.add(lambda t: order.append(t))
+    dev.increment()
+    dev.increment()
+    assert dev.t == 2 and dev.x.value == 2.0 and order == [0, 1]
+
+
+def test_bad_hook_is_refused(graph):
+    dev = graph.add(Ticker("dev"))
+    with pytest.raises(dg.HookError, match="must be a signal or a callable"):
+        dev.before.add(42)
+
+
+def test_run_lengths_and_errors(graph):
+    graph.add(Ticker("dev"))
+    graph.run(ticks=10)
+    graph.run(duration=0.05)  # dt = 0.01
+    assert graph.t == 15
+    with pytest.raises(dg.GraphError, match="exactly one"):
+        graph.run()
+    with pytest.raises(dg.GraphError, match="exactly one"):
+        graph.run(ticks=1, duration=1.0)
+    with pytest.raises(dg.GraphError):
+        graph.run(ticks=-1)
+    with pytest.raises(dg.GraphError, match="no device"):
+        dg.Graph().run(ticks=1)
+
+
+def test_long_run_shows_progress(graph, capsys):
+    graph.add(Ticker("dev"))
+    graph.run(ticks=300, progress=True)
+    assert "tick" in capsys.readouterr().err
+    graph.run(ticks=300)  # short: no bar by default
+    assert capsys.readouterr().err == ""
