@@ -152,7 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
     length.add_argument("--ticks", type=int, help="number of ticks")
     run.add_argument("--set", action="append", default=[], metavar="ENTITY.NAME=VALUE",
                      help="override a parameter or set an input constant (repeatable)")
-    run.add_argument("--rerun", nargs="+", metavar="MODE", help="save [PATH] (default out/NAME.rrd), spawn, serve or off")
+    run.add_argument("--rerun", nargs="+", metavar="MODE",
+                     help="save [PATH] (default out/NAME.rrd), spawn, serve or off")
     run.add_argument("--npz", help="also write the recorded signals to this .npz file")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     run.set_defaults(func=cmd_run)

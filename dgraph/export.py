@@ -16,6 +16,9 @@ if TYPE_CHECKING:
     from dgraph.graph import Graph
 
 
+_MERMAID_BRACKETS = {Input: ("([", "])"), State: ("[[", "]]")}
+
+
 def _node_id(name: str) -> str:
     return "n_" + re.sub(r"[^A-Za-z0-9_]", "_", name)
 
@@ -71,7 +74,7 @@ def to_mermaid(graph: Graph, signals: bool = False) -> str:
         for e in graph:
             out.append(f'  subgraph {_node_id(e.name)}["{e.name} ({e.type_name})"]')
             for sig in e.ports.values():
-                left, right = ("([", "])") if isinstance(sig, Input) else ("[[", "]]") if isinstance(sig, State) else ("[", "]")
+                left, right = _MERMAID_BRACKETS.get(type(sig), ("[", "]"))
                 out.append(f'    {_node_id(sig.full_name)}{left}"{sig.name}"{right}')
             out.append("  end")
         for src, dst in graph.plugs():

@@ -313,7 +313,7 @@ def _find_loop(out: Output, inp: Input) -> list[str]:
         node = parent[id(node)]
     chain.reverse()
     names = [out.full_name, inp.full_name]
-    for prev, node in zip([None, *chain], chain):
+    for prev, node in zip([None, *chain], chain, strict=False):
         if prev is not None:
             via = [i for i in prev._plugged if node in i._subs]
             if via:

@@ -35,15 +35,15 @@ def explain(graph: Graph, sig: Signal) -> str:
             return "\n".join(lines + ["  " + line for line in explain(graph, sig.source).splitlines()])
         status = "holds a constant set by the user" if sig.is_set else (
             "uses its default" if sig.has_default else "is UNPLUGGED: reading it raises")
-        return "\n".join(lines + [f"  {status}; a constant changes only when set again"])
+        return "\n".join([*lines, f"  {status}; a constant changes only when set again"])
     if isinstance(sig, State):
         moves = sig.entity.has_state
         lines.append(f"  state of {sig.entity.name} ({sig.entity.type_name}): set by the entity"
                      + (" at every tick transition" if moves else " only"))
         return "\n".join(lines)
     assert isinstance(sig, Output)
-    lines.append(f"  computed {sig.count} time(s); period {sig.period}; "
-                 + ("STALE: the next read recomputes" if sig.stale else "fresh: the next read at the same tick is a cached read"))
+    status = "STALE: the next read recomputes" if sig.stale else "fresh: the next read at the same tick is cached"
+    lines.append(f"  computed {sig.count} time(s); period {sig.period}; {status}")
     reasons: list[str] = []
     constants: list[str] = []
     seen: set[int] = set()

@@ -68,7 +68,7 @@ def run(graph: Graph, ticks: int | None = None, duration: float | None = None,
     if duration is not None:
         if not duration >= 0:
             raise GraphError(f"duration must be >= 0 s, got {duration!r}")
-        ticks = int(round(duration / graph.dt))
+        ticks = round(duration / graph.dt)
     if not isinstance(ticks, int) or ticks < 0:
         raise GraphError(f"ticks must be an int >= 0, got {ticks!r}")
     if not graph.roles()["stateful"]:

@@ -86,7 +86,7 @@ class Param:
         optional: ``None`` is accepted in addition to ``kind``.
     """
 
-    __slots__ = ("default", "kind", "doc", "choices", "optional", "name")
+    __slots__ = ("choices", "default", "doc", "kind", "name", "optional")
 
     def __init__(self, default: Any = REQUIRED, kind: str = "float", doc: str = "",
                  choices: Sequence[Any] | None = None, optional: bool = False):

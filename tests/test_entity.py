@@ -54,7 +54,7 @@ def test_undeclared_dependency_name_is_refused():
 
 def test_port_names_cannot_shadow_entity_api():
     with pytest.raises(dg.DGraphError, match="'inputs' is an Entity attribute"):
-        class Bad(dg.Entity):  # noqa: F841
+        class Bad(dg.Entity):
             inputs = dg.Input()
 
 

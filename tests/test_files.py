@@ -131,7 +131,8 @@ def test_no_code_runs_from_a_file(tmp_path):
     marker = tmp_path / "pwned"
     attacks = [
         f"entities: !!python/object/apply:os.system ['touch {marker}']\n",
-        f"entities:\n  a: {{type: !!python/name:os.system , params: {{}}}}\nx: !!python/object/new:os.system ['touch {marker}']\n",
+        "entities:\n  a: {type: !!python/name:os.system , params: {}}\n",
+        f"x: !!python/object/new:os.system ['touch {marker}']\nentities: {{}}\n",
         "entities:\n  a: {type: '__import__(\"os\").system'}\n",
         "entities:\n  a: {type: dgraph.files.os.system}\n",
     ]

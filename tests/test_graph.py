@@ -47,7 +47,7 @@ def test_plug_direction_and_graph_membership(graph):
 
 
 def test_cycle_is_refused_and_listed(graph):
-    a, b, c = graph.add(Scale("a"), Scale("b"), Scale("c"))
+    a, _b, _c = graph.add(Scale("a"), Scale("b"), Scale("c"))
     graph.plug("a.y", "b.u")
     graph.plug("b.y", "c.u")
     with pytest.raises(dg.CycleError) as info:
@@ -109,7 +109,7 @@ def test_exports_name_every_entity_and_plug(graph):
 
 def test_explain_says_why(graph):
     graph.add(Ticker("dev"))
-    a, b = graph.add(Scale("a"), Scale("b"))
+    _a, b = graph.add(Scale("a"), Scale("b"))
     graph.plug("dev.x", "a.u")
     b.u.set(1.0)
     b.y(0)

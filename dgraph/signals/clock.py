@@ -25,7 +25,7 @@ class Clock:
         inner: profiling accumulator of the time spent in nested computations.
     """
 
-    __slots__ = ("t", "time_varying", "held", "cache_enabled", "check_values", "profiling", "inner")
+    __slots__ = ("cache_enabled", "check_values", "held", "inner", "profiling", "t", "time_varying")
 
     def __init__(self) -> None:
         self.t: int | None = None

@@ -32,7 +32,7 @@ _UNSET = object()
 class Signal:
     """Common part of inputs and outputs: owner, name, spec and documentation."""
 
-    __slots__ = ("entity", "name", "spec", "doc", "_shape_decl", "_dtype", "_labels")
+    __slots__ = ("_dtype", "_labels", "_shape_decl", "doc", "entity", "name", "spec")
 
     def __init__(self, shape: ShapeDecl = None, dtype: str = "float",
                  labels: Sequence[str] | None = None, doc: str = ""):
@@ -90,8 +90,23 @@ class Output(Signal):
     N ticks. Counters: ``count`` (computations), ``total_duration`` (seconds, when profiling).
     """
 
-    __slots__ = ("_fn", "_value", "_time", "_stale", "_down", "_plugged", "_clock", "_computing",
-                 "period", "depends", "time_varying", "deps", "count", "total_duration", "_held")
+    __slots__ = (
+        "_clock",
+        "_computing",
+        "_down",
+        "_fn",
+        "_held",
+        "_plugged",
+        "_stale",
+        "_time",
+        "_value",
+        "count",
+        "depends",
+        "deps",
+        "period",
+        "time_varying",
+        "total_duration",
+    )
 
     def __init__(self, fn: Callable[..., Any] | None = None, *, shape: ShapeDecl = None,
                  dtype: str = "float", depends: Sequence[str] | None = None, period: int = 1,
@@ -161,7 +176,10 @@ class Output(Signal):
                 self.total_duration += elapsed - clock.inner
                 clock.inner = outer_inner + elapsed
         if clock.check_values:
-            self.spec.check(value, f"{self.full_name} at tick {t}")
+            problem = self.spec.problem(value)
+            if problem is not None:
+                raise SpecError(f"{self.full_name} at tick {t}: {problem}", entity=self.entity.name,
+                                signal=self.name)
         self._value = value
         self._time = t
         self._stale = not clock.cache_enabled
@@ -288,7 +306,7 @@ class Input(Signal):
     :class:`~dgraph.errors.UnpluggedInputError` naming ``entity.signal``.
     """
 
-    __slots__ = ("_source", "_value", "_has_value", "_set_time", "is_set", "default", "_subs")
+    __slots__ = ("_has_value", "_set_time", "_source", "_subs", "_value", "default", "is_set")
 
     def __init__(self, shape: ShapeDecl = None, dtype: str = "float", default: Any = _UNSET,
                  labels: Sequence[str] | None = None, doc: str = ""):

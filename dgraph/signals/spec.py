@@ -30,7 +30,7 @@ class Spec:
     ``labels`` optionally names the components of a vector (used by recorders and plots).
     """
 
-    __slots__ = ("shape", "dtype", "labels", "exact")
+    __slots__ = ("dtype", "exact", "labels", "shape")
 
     def __init__(self, shape: tuple[int | None, ...] | None = None, dtype: str = "float",
                  labels: Sequence[str] | None = None):
@@ -62,7 +62,7 @@ class Spec:
             return True
         if len(self.shape) != len(source.shape):
             return False
-        return all(a is None or b is None or a == b for a, b in zip(self.shape, source.shape))
+        return all(a is None or b is None or a == b for a, b in zip(self.shape, source.shape, strict=False))
 
     # -- values ---------------------------------------------------------------------------
     def _shape_ok(self, shape: tuple[int, ...]) -> bool:
@@ -70,7 +70,7 @@ class Spec:
             return True
         if len(shape) != len(self.shape):
             return False
-        return all(d is None or d == s for d, s in zip(self.shape, shape))
+        return all(d is None or d == s for d, s in zip(self.shape, shape, strict=False))
 
     def coerce(self, value: Any, where: str) -> Any:
         """Return ``value`` converted to this spec (a float, int, bool or a fresh array).
@@ -111,23 +111,33 @@ class Spec:
             raise SpecError(f"{where}: expected a bool, got {_short(value)}")
         return bool(value)
 
-    def check(self, value: Any, where: str) -> None:
-        """Check a computed value: type, shape and absence of NaN (raises :class:`SpecError`)."""
-        if self.dtype == "object":
-            return
+    def problem(self, value: Any) -> str | None:
+        """What is wrong with a computed value (type, shape, NaN), or None. Cheap when fine."""
         if type(value) is float:
-            if self.shape not in (None, ()):
-                raise SpecError(f"{where}: computed a scalar, declared {self!r}")
             if value != value:
-                raise SpecError(f"{where}: computed NaN")
-            return
+                return "computed NaN"
+            if self.shape is not None and self.shape != ():
+                return f"computed a scalar, declared {self!r}"
+            return None
+        if self.dtype == "object":
+            return None
         if isinstance(value, np.ndarray):
             if not self._shape_ok(value.shape):
-                raise SpecError(f"{where}: computed shape {value.shape}, declared {self!r}")
-            if self.dtype == "float" and value.dtype.kind == "f" and np.isnan(value).any():
-                raise SpecError(f"{where}: computed a value containing NaN")
-            return
-        self._coerce_scalar(value, where)
+                return f"computed shape {value.shape}, declared {self!r}"
+            if value.dtype.kind == "f" and np.isnan(value).any():
+                return "computed a value containing NaN"
+            return None
+        try:
+            self._coerce_scalar(value, "value")
+        except SpecError as exc:
+            return str(exc)
+        return None
+
+    def check(self, value: Any, where: str) -> None:
+        """Raise :class:`SpecError` naming ``where`` if :meth:`problem` finds one."""
+        problem = self.problem(value)
+        if problem is not None:
+            raise SpecError(f"{where}: {problem}")
 
 
 _NUMPY = {"float": np.float64, "int": np.int64, "bool": np.bool_}

@@ -21,7 +21,7 @@ def test_outputs_are_lazy_and_computed_once_per_tick(graph):
 def test_diamond_computes_its_top_once_per_tick(graph):
     dev = graph.add(Ticker("dev"))
     top = graph.add(Scale("top"))
-    left, right = graph.add(Scale("left"), Scale("right"))
+    left, _right = graph.add(Scale("left"), Scale("right"))
     bottom = graph.add(Sum2("bottom"))
     graph.plug("dev.x", "top.u")
     graph.plug("top.y", "left.u")
@@ -121,7 +121,7 @@ def test_period_n_recomputes_at_most_every_n_ticks_and_releases_downstream(graph
 
 def test_period_hold_is_released_even_if_nothing_else_pulls(graph):
     graph.add(Ticker("dev"))
-    p = graph.add(Periodic("p", every=3))
+    graph.add(Periodic("p", every=3))
     graph.plug("dev.x", "p.u")
     d = graph.add(Scale("d"))
     graph.plug("p.y", "d.u")

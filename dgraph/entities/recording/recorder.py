@@ -85,7 +85,7 @@ class Recorder(dg.Entity):
         """Read every recorded signal at ``t`` and store the values."""
         sources = self._sources if self._sources is not None else self._open()
         self.ticks.append(t)
-        for name, sig in zip(self.signals, sources):
+        for name, sig in zip(self.signals, sources, strict=False):
             value = sig(t)
             self._columns[name].append(value.copy() if isinstance(value, np.ndarray) else value)
         if self._stream is not None:
@@ -102,7 +102,7 @@ class Recorder(dg.Entity):
         keep = ticks % self.decimation == 0
         if not keep.any():
             return
-        for name, sig in zip(self.signals, self._sources or []):
+        for name, sig in zip(self.signals, self._sources or [], strict=False):
             values = np.asarray(self._columns[name][-n:], dtype=float)[keep]
             shape = values.shape[1:]
             self._stream.send(f"signals/{name.replace('.', '/')}", component_names(sig, shape),

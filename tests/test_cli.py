@@ -1,0 +1,79 @@
+"""The dgraph command: run (closed loop converges), check, show, entities, error exits."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from dgraph.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+PD = str(ROOT / "graphs" / "pd_double_integrator.yaml")
+
+
+def dgraph_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    exe = Path(sys.executable).with_name("dgraph")
+    return subprocess.run([str(exe), *args], capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+def test_run_pd_loop_converges_to_the_setpoint(tmp_path):
+    result = dgraph_cli("run", PD, "--rerun", "save", "pd.rrd", "--npz", "pd.npz", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "3000 ticks" in result.stdout and "pd.rrd" in result.stdout
+    data = np.load(tmp_path / "pd.npz")
+    q = data["robot.q"]
+    assert np.allclose(q[-1], [1.0, -0.5], atol=1e-3)
+    err = np.abs(q - [1.0, -0.5]).max(axis=1)
+    assert err[0] == pytest.approx(1.0) and np.all(np.diff(err) <= 1e-12)  # critically damped: monotone
+    assert (tmp_path / "pd.rrd").stat().st_size > 0
+
+
+def test_run_with_overrides_changes_the_result(tmp_path):
+    result = dgraph_cli("run", PD, "--duration", "1.0", "--set", "setpoint.value=[2.0, 0.0]",
+                        "--set", "kp.gain=100.0", "--set", "kd.gain=20.0", "--rerun", "off",
+                        "--npz", "fast.npz", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    q = np.load(tmp_path / "fast.npz")["robot.q"]
+    # critically damped at 10 rad/s: |e(1 s)| = 2 (1 + 10) exp(-10) = 1.0e-3
+    assert len(q) == 1000 and abs(q[-1, 0] - 2.0) < 2e-3 and abs(q[-1, 0] - 2.0) > 5e-4
+
+
+def test_default_recording_goes_to_out(tmp_path):
+    result = dgraph_cli("run", PD, "--ticks", "10", "-q", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "out" / "pd_double_integrator.rrd").exists()
+
+
+def test_errors_exit_2_with_file_and_line(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("entities:\n  a: {type: Gian}\n")
+    assert main(["check", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert f"{bad}:2" in err and "did you mean Gain" in err
+    assert main(["run", PD, "--set", "nope"]) == 2
+    assert main(["run", PD, "--set", "kp.gain=[1, 2, 3]", "--rerun", "off", "--ticks", "1"]) == 2
+    assert "kp" in capsys.readouterr().err
+
+
+def test_check_reports_problems(tmp_path, capsys):
+    unplugged = tmp_path / "unplugged.yaml"
+    unplugged.write_text("entities:\n  k: {type: Gain, params: {size: 2}}\n")
+    assert main(["check", str(unplugged)]) == 1
+    assert "input k.input is not plugged" in capsys.readouterr().out
+    assert main(["check", PD]) == 0
+    assert "OK (7 entities, 7 plugs" in capsys.readouterr().out
+
+
+def test_show_and_entities(tmp_path, capsys):
+    assert main(["show", PD, "--format", "mermaid"]) == 0
+    assert "flowchart LR" in capsys.readouterr().out
+    assert main(["show", PD, "--format", "dot", "--signals", "-o", str(tmp_path / "g.dot")]) == 0
+    assert "cluster_robot" in (tmp_path / "g.dot").read_text()
+    assert main(["entities"]) == 0
+    listing = capsys.readouterr().out
+    assert "KinematicDevice:" in listing and "Recorder:" in listing
+    assert main(["entities", "Nope"]) == 2
