@@ -10,6 +10,7 @@ Medians over 7 repeats, like bench/signal_overhead.py.
 
 from __future__ import annotations
 
+import itertools
 import json
 import statistics
 import sys
@@ -24,7 +25,7 @@ REPEATS = 7
 def measure(n: int) -> dict[str, float]:
     builder = DiagramBuilder()
     gains = [builder.AddSystem(Gain(1.0, 1)) for _ in range(n)]
-    for a, b in zip(gains, gains[1:]):
+    for a, b in itertools.pairwise(gains):
         builder.Connect(a.get_output_port(), b.get_input_port())
     builder.ExportInput(gains[0].get_input_port())
     builder.ExportOutput(gains[-1].get_output_port())

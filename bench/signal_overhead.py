@@ -26,7 +26,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from topologies import TOPOLOGIES  # noqa: E402
+from topologies import TOPOLOGIES
 
 REPEATS = 7
 
