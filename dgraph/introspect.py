@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from dgraph.signals.signal import Input, Output, Signal, State
 
 if TYPE_CHECKING:
+    from dgraph.entity import Entity
     from dgraph.graph import Graph
 
 
@@ -107,7 +108,7 @@ def profile(graph: Graph, ticks: int) -> Profile:
     Time spent in an output excludes the upstream outputs it pulls; time in a stateful
     entity's ``prepare_state``/``commit_state`` excludes the outputs computed inside them.
     """
-    from dgraph.loop import run_after_hooks
+    from dgraph.loop import step
 
     clock = graph.clock
     outputs = [(e, o) for e in graph for o in e.outputs.values()]
@@ -115,23 +116,18 @@ def profile(graph: Graph, ticks: int) -> Profile:
     for _, o in outputs:
         o.total_duration = 0.0
     own: dict[str, float] = {e.name: 0.0 for e in graph}
-    roles = graph.roles()
+
+    def timed(entity: Entity, phase: str, t: int) -> None:
+        clock.inner = 0.0
+        start = time.perf_counter()
+        getattr(entity, phase)(t)
+        own[entity.name] += time.perf_counter() - start - clock.inner
+
     clock.profiling = True
     start = time.perf_counter()
     try:
         for _ in range(ticks):
-            t = graph.t
-            for device in roles["devices"]:
-                device.before.run(t)
-            for phase in ("prepare_state", "observe", "commit_state"):
-                group = roles["observers"] if phase == "observe" else roles["stateful"]
-                for entity in group:
-                    clock.inner = 0.0
-                    t0 = time.perf_counter()
-                    getattr(entity, phase)(t + 1 if phase == "commit_state" else t)
-                    own[entity.name] += time.perf_counter() - t0 - clock.inner
-            graph.t = t + 1
-            run_after_hooks(roles["devices"], graph.t)
+            step(graph, timed)
     finally:
         clock.profiling = False
     wall = time.perf_counter() - start
