@@ -14,6 +14,7 @@ from dgraph.entity import Entity, command
 from dgraph.errors import (
     ComputeError,
     CycleError,
+    DependencyError,
     DGraphError,
     GraphError,
     GraphFileError,
@@ -45,7 +46,7 @@ def save(graph: Graph, path: str) -> None:
 
 
 __all__ = [
-    "ComputeError", "CycleError", "DGraphError", "Device", "Entity", "Graph", "GraphError",
+    "ComputeError", "CycleError", "DGraphError", "DependencyError", "Device", "Entity", "Graph", "GraphError",
     "GraphFileError", "HookError", "Hooks", "Input", "Output", "Param", "ParamError", "PlugError",
     "RegistryError", "Signal", "Spec", "SpecError", "State", "UnpluggedInputError", "command",
     "entity_types", "get_type", "load", "output", "plug", "register", "save",

@@ -38,6 +38,10 @@ class CycleError(PlugError):
         self.cycle = cycle
 
 
+class DependencyError(DGraphError):
+    """An output read a port of its entity that it does not declare in ``depends``."""
+
+
 class UnpluggedInputError(DGraphError):
     """An input was read while it is neither plugged nor set and has no default."""
 

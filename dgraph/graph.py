@@ -8,7 +8,7 @@ validates the whole graph, and drives the device loop (:mod:`dgraph.loop`).
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 import networkx as nx
@@ -16,6 +16,7 @@ import networkx as nx
 from dgraph.entity import Entity
 from dgraph.errors import CycleError, GraphError, PlugError
 from dgraph.signals.clock import Clock
+from dgraph.signals.dependency_check import set_checking
 from dgraph.signals.signal import Input, Output, Signal, State
 
 
@@ -41,6 +42,7 @@ class Graph:
         self.duration: float | None = None
         self._entities: dict[str, Entity] = {}
         self._roles: dict[str, list[Entity]] | None = None
+        self._check_dependencies = False
 
     # -- entities -------------------------------------------------------------------------
     def add(self, *entities: Entity) -> Any:
@@ -57,6 +59,8 @@ class Graph:
             entity._attach_clock(self.clock)
             entity.graph = self
             self._entities[entity.name] = entity
+        if self._check_dependencies:
+            set_checking(self._computed_outputs(entities), True)
         self._roles = None
         return entities[0] if len(entities) == 1 else entities
 
@@ -171,6 +175,20 @@ class Graph:
     @check_values.setter
     def check_values(self, enabled: bool) -> None:
         self.clock.check_values = bool(enabled)
+
+    @property
+    def check_dependencies(self) -> bool:
+        """Debug mode: an output reading a port it did not declare raises DependencyError."""
+        return self._check_dependencies
+
+    @check_dependencies.setter
+    def check_dependencies(self, enabled: bool) -> None:
+        self._check_dependencies = bool(enabled)
+        set_checking(self._computed_outputs(), self._check_dependencies)
+
+    def _computed_outputs(self, entities: Iterable[Entity] | None = None) -> list[Output]:
+        return [o for e in (self if entities is None else entities) for o in e.outputs.values()
+                if not isinstance(o, State)]
 
     # -- structure --------------------------------------------------------------------------
     def signal_graph(self) -> nx.DiGraph:

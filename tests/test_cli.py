@@ -77,3 +77,34 @@ def test_show_and_entities(tmp_path, capsys):
     listing = capsys.readouterr().out
     assert "KinematicDevice:" in listing and "Recorder:" in listing
     assert main(["entities", "Nope"]) == 2
+
+
+def test_a_run_that_fails_keeps_what_was_recorded(tmp_path, capsys):
+    import dgraph as dg
+
+    @dg.register(name="TestFailAtTick")
+    class FailAtTick(dg.Entity):
+        """Raises at a given tick (to test error paths)."""
+
+        tick = dg.Param(kind="int")
+        u = dg.Input(shape=(2,))
+
+        @dg.output(shape=(2,), depends=("u", "t"))
+        def y(self, t):
+            if t == self.tick:
+                raise RuntimeError("boom")
+            return self.u(t)
+
+    text = Path(PD).read_text().replace(
+        "  - command.output -> robot.control",
+        "  - command.output -> fail.u\n  - fail.y -> robot.control").replace(
+        "entities:\n", "entities:\n  fail: {type: TestFailAtTick, params: {tick: 250}}\n")
+    graph_file = tmp_path / "failing.yaml"
+    graph_file.write_text(text)
+    assert main(["run", str(graph_file), "--rerun", "save", str(tmp_path / "f.rrd"),
+                 "--npz", str(tmp_path / "f.npz")]) == 2
+    err = capsys.readouterr().err
+    assert "fail.y failed at tick 250: RuntimeError: boom" in err
+    data = np.load(tmp_path / "f.npz")
+    assert len(data["tick"]) == 250 and data["tick"][-1] == 249
+    assert (tmp_path / "f.rrd").stat().st_size > 0

@@ -99,6 +99,7 @@ class Output(Signal):
         "_plugged",
         "_stale",
         "_time",
+        "_unguarded",
         "_value",
         "count",
         "depends",
@@ -129,6 +130,7 @@ class Output(Signal):
         self.count = 0
         self.total_duration = 0.0
         self._held = False
+        self._unguarded: Callable[..., Any] | None = None
 
     def bind(self, entity: Entity, name: str) -> Output:
         """Return this template's copy for ``entity`` (called by :class:`~dgraph.Entity`)."""

@@ -258,3 +258,41 @@ def test_invalidation_has_no_recursion_limit(graph):
         prev = e.y
     dev.increment()  # invalidates a 3000-long chain iteratively
     assert prev.stale
+
+
+def test_check_dependencies_catches_undeclared_reads(graph):
+    class Sloppy(dg.Entity):
+        a = dg.Input(shape=())
+        b = dg.Input(shape=(), default=1.0)
+
+        @dg.output(shape=(), depends=("a",))
+        def y(self, t):
+            return self.a(t) + self.b(t)  # b is read but not declared
+
+        @dg.output(shape=(), depends=("y",))
+        def z(self, t):
+            return self.y(t)  # y itself reads a (and b): checked with y's own declaration
+
+    s = graph.add(Sloppy("s"))
+    s.a.set(1.0)
+    assert s.z(0) == 2.0  # unnoticed without the check
+    graph.check_dependencies = True
+    s.a.set(2.0)
+    with pytest.raises(dg.DependencyError, match=r"s\.y read s\.b at tick 1 but does not declare it"):
+        s.z(1)
+    late = graph.add(Sloppy("late"))  # entities added later are checked too
+    late.a.set(0.0)
+    with pytest.raises(dg.DependencyError, match=r"late\.y read late\.b"):
+        late.y(2)
+    graph.check_dependencies = False
+    assert s.z(3) == 3.0 and isinstance(s.b, dg.Input)  # ports restored after the failure
+
+
+def test_check_dependencies_passes_for_correct_declarations(graph):
+    graph.check_dependencies = True
+    graph.add(Ticker("dev"))
+    _a, b = graph.add(Scale("a"), Scale("b"))
+    graph.plug("dev.x", "a.u")
+    graph.plug("a.z", "b.u")
+    graph.run(ticks=3)
+    assert b.z(graph.t) == 2 * (2 * 3 + 1) + 1
