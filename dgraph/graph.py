@@ -67,17 +67,22 @@ class Graph:
     def remove(self, name: str) -> Entity:
         """Unplug every port of entity ``name`` and take it out of the graph."""
         entity = self.entity(name)
-        for sig in entity.ports.values():
+        mine = list(entity.ports.values())
+        for sig in mine:
             if isinstance(sig, Input):
                 sig.unplug()
             elif isinstance(sig, Output):
                 for inp in sig.plugged_inputs:
                     inp.unplug()
-                if sig in self.clock.time_varying:
-                    self.clock.time_varying.remove(sig)
+        set_checking(self._computed_outputs([entity]), False)
+        self.clock.time_varying = [o for o in self.clock.time_varying if o not in mine]
+        self.clock.held = [o for o in self.clock.held if o not in mine]
+        for sig in mine:
+            if isinstance(sig, Output):
+                sig._held = False
         del self._entities[name]
         entity.graph = None
-        entity._clock = Clock()
+        entity._attach_clock(Clock())
         self._roles = None
         return entity
 
@@ -282,6 +287,13 @@ class Graph:
             closer = getattr(entity, "close", None)
             if callable(closer):
                 closer()
+
+    def __enter__(self) -> Graph:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """Leaving a ``with`` block closes the graph, even after an error (recordings are kept)."""
+        self.close()
 
     def __repr__(self) -> str:
         return f"<Graph {self.name!r}: {len(self)} entities, {len(self.plugs())} plugs, t={self.t}, dt={self.dt}>"

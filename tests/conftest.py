@@ -73,6 +73,12 @@ def _copy_u(entity, t):
     return entity.u(t)
 
 
+@pytest.fixture(autouse=True)
+def _work_in_tmp(tmp_path, monkeypatch):
+    """Tests run in a temporary directory: default outputs (out/*.rrd) land there."""
+    monkeypatch.chdir(tmp_path)
+
+
 @pytest.fixture
 def graph():
     return dg.Graph(dt=0.01, name="test")

@@ -133,3 +133,13 @@ def test_profile_counts_recomputations_per_tick(graph):
     assert rows["a"].computations_per_tick == 1.0
     assert rows["b"].computations_per_tick <= 1 / 50
     assert prof.us_per_tick > 0 and "us/tick" in str(prof)
+
+
+def test_removed_entity_keeps_working_on_its_own_clock(graph):
+    from dgraph.entities.references import Sinusoid
+
+    s = graph.add(Sinusoid("s", amplitude=1.0, frequency=1.0, dt=0.25))
+    assert s.output(1) == pytest.approx(1.0)
+    graph.remove("s")
+    assert s.output not in graph.clock.time_varying and s.output._clock is not graph.clock
+    assert s.output(2) == pytest.approx(0.0, abs=1e-12) and s.output(3) == pytest.approx(-1.0)

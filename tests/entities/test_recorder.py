@@ -91,9 +91,15 @@ def test_unknown_recorded_signal_is_reported(tmp_path):
         g.step()
 
 
-def test_save_needs_a_path():
-    with pytest.raises(dg.ParamError, match="rrd_path"):
-        Recorder("rec", signals=["a.y"], rerun="save")
+def test_default_is_an_rrd_file_named_after_the_graph(tmp_path):
+    g = dg.Graph(name="defaults")
+    g.add(Ticker("dev"))
+    g.add(Recorder("rec", signals=["dev.x"]))
+    g.run(ticks=3)
+    g.close()
+    assert (tmp_path / "out" / "defaults.rrd").stat().st_size > 0  # the test runs in tmp_path
+    with pytest.raises(dg.ParamError, match="decimation"):
+        Recorder("bad", signals=["dev.x"], decimation=0)
 
 
 def test_close_is_idempotent_and_in_memory_data(tmp_path):
@@ -104,3 +110,13 @@ def test_close_is_idempotent_and_in_memory_data(tmp_path):
     g.close()
     g.close()
     assert not (tmp_path / "run.rrd").exists() and (tmp_path / "run.npz").exists()
+
+
+def test_graph_as_context_manager_flushes_on_error(tmp_path):
+    g = build(tmp_path)
+    with pytest.raises(dg.HookError), g:
+        g.run(ticks=10)
+        g["dev"].before.add(g.add(Scale("dangling")).y)  # its input is unplugged: the hook fails
+        g.run(ticks=5)
+    assert np.load(tmp_path / "run.npz")["tick"].tolist() == list(range(10))
+    assert read_series(str(tmp_path / "run.rrd"))["/signals/dev/x"][0].tolist() == list(range(10))

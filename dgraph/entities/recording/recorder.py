@@ -32,23 +32,22 @@ class Recorder(dg.Entity):
     ``entity.signal``), and to Rerun as time series on the ``tick`` and ``time`` timelines,
     one series per component, entity path ``signals/<entity>/<signal>``.
 
-    Parameters: ``signals`` (``entity.signal`` names), ``rerun`` (``off``, ``save``, ``spawn``,
-    ``serve``), ``rrd_path`` (for ``save``), ``npz_path``, ``decimation`` (log one tick in N to
-    Rerun), ``flush_every`` (ticks buffered before sending to Rerun).
+    Parameters: ``signals`` (``entity.signal`` names), ``rerun`` (``save``, the default: an .rrd
+    file, ``rrd_path`` or ``out/<graph name>.rrd``; ``spawn``: a viewer; ``serve``: a web viewer
+    on loopback; ``off``), ``npz_path``, ``decimation`` (log one tick in N to Rerun),
+    ``flush_every`` (ticks buffered before sending to Rerun).
     """
 
     observes = True
     signals = dg.Param(kind="str_list", doc="names 'entity.signal' of the recorded signals")
-    rerun = dg.Param("off", kind="str", choices=("off", "save", "spawn", "serve"), doc="Rerun sink")
-    rrd_path = dg.Param(None, kind="str", doc=".rrd file written when rerun=save")
+    rerun = dg.Param("save", kind="str", choices=("off", "save", "spawn", "serve"), doc="Rerun sink")
+    rrd_path = dg.Param(None, kind="str", doc=".rrd file for rerun=save (default out/<graph name>.rrd)")
     npz_path = dg.Param(None, kind="str", doc=".npz file written on close (default: none)")
     decimation = dg.Param(1, kind="int", doc="send one tick in N to Rerun")
     flush_every = dg.Param(200, kind="int", doc="ticks buffered before a Rerun send")
 
     def configure(self) -> None:
         """Check the parameters."""
-        if self.rerun == "save" and not self.rrd_path:
-            raise dg.ParamError(f"{self.name}: rerun=save needs rrd_path", entity=self.name)
         if self.decimation < 1 or self.flush_every < 1:
             raise dg.ParamError(f"{self.name}: decimation and flush_every must be >= 1", entity=self.name)
         self._sources: list[Signal] | None = None
@@ -77,6 +76,8 @@ class Recorder(dg.Entity):
         if problems:
             raise dg.GraphError("; ".join(problems), entity=self.name)
         self._sources = [self.graph.signal(name) for name in self.signals]
+        if self.rerun == "save" and not self.rrd_path:
+            self.rrd_path = f"out/{self.graph.name}.rrd"
         if self.rerun != "off":
             self._stream = RerunStream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt)
         return self._sources
