@@ -42,11 +42,12 @@ def _parse_sets(items: list[str]) -> dict[str, Any]:
 
 def _recorder_overrides(path: str, args: argparse.Namespace) -> dict[str, Any]:
     """Point every recorder of the file at the sinks chosen on the command line."""
+    from dgraph.entities.recording.recorder import safe_file_stem
     from dgraph.files import declared_entities, parse
 
     data, _ = parse(Path(path).read_text(encoding="utf-8"), path)
     names = [n for n, spec in declared_entities(data).items() if spec["type"] == "Recorder"]
-    stem = data.get("name", Path(path).stem)
+    stem = safe_file_stem(data.get("name", Path(path).stem))
     mode, rrd = _rerun_mode(args.rerun, stem)
     out: dict[str, Any] = {}
     for name in names:

@@ -76,9 +76,9 @@ class Device(Entity):
     """Base class of devices (simulators, hardware interfaces, integrators).
 
     Subclasses declare their state as :class:`~dgraph.State` outputs and a control input,
-    and implement :meth:`prepare_state` (read ``control(t)``, compute the next state) and
-    :meth:`commit_state` (``state.set(next, t + 1)``). Splitting the two keeps the state
-    consistent when anything fails mid-tick.
+    and implement :meth:`prepare_state` (read ``control(t)``, compute and ``state.stage`` the
+    next state) and :meth:`commit_state` (``state.commit(t + 1)``, which cannot fail).
+    Splitting the two keeps every state consistent when anything fails mid-tick.
     """
 
     has_state = True
@@ -103,6 +103,7 @@ class Device(Entity):
             self.graph.step()
             return
         from dgraph.loop import run_after_hooks, transition
-        transition([self], [self], [], self._standalone_t)
+        roles = {"devices": [self], "stateful": [self], "observers": [], "periodic": []}
+        transition(roles, self._standalone_t)
         self._standalone_t += 1
         run_after_hooks([self], self._standalone_t)

@@ -181,6 +181,8 @@ class Entity:
                 sig._clock = clock
                 if sig.time_varying:
                     clock.time_varying.append(sig)
+                if sig._held:  # a periodic hold moves with its output
+                    clock.held.append(sig)
         self._clock = clock
 
     # -- tick transition (stateful entities) --------------------------------------------------

@@ -21,6 +21,7 @@ error is a :class:`~dgraph.errors.GraphFileError` carrying the file, line and ke
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 from typing import Any
@@ -82,10 +83,11 @@ class _Document:
             path = path[:-1]
         return self.lines.get(path)
 
-    def error(self, message: str, path: tuple[Any, ...]) -> GraphFileError:
-        """A :class:`GraphFileError` located at ``path``."""
+    def error(self, message: str, path: tuple[Any, ...], cause: DGraphError | None = None) -> GraphFileError:
+        """A :class:`GraphFileError` located at ``path`` (naming the entity and signal of ``cause``)."""
         key = ".".join(str(p) for p in path) or None
-        return GraphFileError(message, file=self.file, line=self.line(path), key=key)
+        return GraphFileError(message, file=self.file, line=self.line(path), key=key,
+                              entity=cause.entity if cause else None, signal=cause.signal if cause else None)
 
 
 def _convert(doc: _Document, node: yaml.Node, path: tuple[Any, ...], seen: set[int],
@@ -102,11 +104,12 @@ def _convert(doc: _Document, node: yaml.Node, path: tuple[Any, ...], seen: set[i
             if not isinstance(key_node, yaml.ScalarNode) or key_node.tag not in _PLAIN_TAGS:
                 raise GraphFileError("mapping keys must be plain scalars (no merge keys or tags)", file=doc.file,
                                      line=key_node.start_mark.line + 1, key=".".join(map(str, path)) or None)
-            key = str(loader.construct_object(key_node))
+            key = key_node.value  # the text as written: `off:` names 'off', not False
             if key in out:
                 raise GraphFileError(f"duplicate key {key!r}", file=doc.file,
                                      line=key_node.start_mark.line + 1, key=".".join(map(str, (*path, key))))
             out[key] = _convert(doc, value_node, (*path, key), seen, loader)
+            doc.lines[(*path, key)] = key_node.start_mark.line + 1  # errors point at the key
         return out
     if isinstance(node, yaml.SequenceNode):
         if node.tag != "tag:yaml.org,2002:seq":
@@ -114,7 +117,24 @@ def _convert(doc: _Document, node: yaml.Node, path: tuple[Any, ...], seen: set[i
         return [_convert(doc, item, (*path, i), seen, loader) for i, item in enumerate(node.value)]
     if node.tag not in _PLAIN_TAGS:
         raise doc.error(f"tag {node.tag!r} is not allowed (only plain strings, numbers, booleans, null)", path)
-    return loader.construct_object(node)
+    return _scalar(doc, node, path, loader)
+
+
+def _scalar(doc: _Document, node: yaml.Node, path: tuple[Any, ...], loader: yaml.SafeLoader) -> Any:
+    """A plain scalar's value; an explicit tag on text that does not parse is a file error."""
+    def error(message: str) -> GraphFileError:
+        return GraphFileError(message, file=doc.file, line=node.start_mark.line + 1,
+                              key=".".join(map(str, path)) or None)
+
+    try:
+        value = loader.construct_object(node)
+    except (ValueError, KeyError, IndexError, TypeError, OverflowError, yaml.YAMLError):
+        raise error(f"{node.value!r} is not a valid {node.tag.rsplit(':', 1)[-1]}") from None
+    too_large = (isinstance(value, float) and math.isinf(value) and node.value.lower().lstrip("+-") != ".inf") or (
+        isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 2**63)
+    if too_large:
+        raise error(f"number {node.value[:24]}{'...' if len(node.value) > 24 else ''} is too large")
+    return value
 
 
 def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], _Document]:
@@ -144,18 +164,28 @@ def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], _Document]
     errors = sorted(jsonschema.Draft202012Validator(SCHEMA).iter_errors(data), key=lambda e: list(e.absolute_path))
     if errors:
         err = jsonschema.exceptions.best_match(errors)
-        raise doc.error(_schema_message(err), tuple(err.absolute_path))
+        message, path = _schema_message(err)
+        raise doc.error(message, path)
     return data, doc
 
 
-def _schema_message(err: jsonschema.ValidationError) -> str:
+def _schema_message(err: jsonschema.ValidationError) -> tuple[str, tuple[Any, ...]]:
+    """A readable message for a schema violation and the path of the offending key or value."""
+    path = tuple(err.absolute_path)
     if err.validator == "additionalProperties":
-        return f"{err.message} (allowed keys: {', '.join(err.schema.get('properties', {}))})"
+        allowed = err.schema.get("properties", {})
+        extra = [k for k in err.instance if k not in allowed]
+        return f"unknown key {extra[0]!r} (allowed: {', '.join(allowed)})", (*path, extra[0])
+    if "propertyNames" in err.schema_path:  # a key itself is wrong: point at it
+        bad = err.instance
+        if path == ("entities",):
+            return f"invalid entity name {bad!r}: use letters, digits, '_' or '-', starting with a letter", (*path, bad)
+        return f"{bad!r} must read 'entity.signal'", (*path, bad)
     if err.validator == "pattern" and "->" in str(err.schema.get("pattern", "")):
-        return f"plug {err.instance!r} must read 'entity.output -> entity.input'"
+        return f"plug {err.instance!r} must read 'entity.output -> entity.input'", path
     if err.validator == "pattern":
-        return f"{err.instance!r} must read 'entity.signal'"
-    return err.message
+        return f"{err.instance!r} must read 'entity.signal'", path
+    return err.message, path
 
 
 def load(path: str | Path, overrides: dict[str, Any] | None = None) -> Graph:
@@ -184,6 +214,8 @@ def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = 
         raise
     except DGraphError as exc:  # anything the library refused, located at the file level
         raise GraphFileError(str(exc), file=file, entity=exc.entity, signal=exc.signal) from exc
+    except (ValueError, TypeError, OverflowError, MemoryError) as exc:  # a value no check foresaw
+        raise GraphFileError(f"could not build the graph: {type(exc).__name__}: {exc}", file=file) from exc
 
 
 def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> Graph:
@@ -201,7 +233,7 @@ def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> G
         try:
             graph.plug(source, target)
         except DGraphError as exc:
-            raise doc.error(str(exc), ("plugs", i)) from None
+            raise doc.error(str(exc), ("plugs", i), exc) from None
     for key, value in data.get("set", {}).items():
         _set_constant(graph, doc, key, value, ("set", key))
     for key, value in constants.items():
@@ -209,7 +241,7 @@ def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> G
     for entity in graph:
         problems = entity.check()
         if problems:
-            raise doc.error("; ".join(problems), ("entities", entity.name))
+            raise doc.error("; ".join(problems), entities[entity.name].get("_path", ("entities", entity.name)))
     return graph
 
 
@@ -234,7 +266,7 @@ def _split_overrides(doc: _Document, entities: dict[str, Any], overrides: dict[s
         try:
             is_param = name in get_type(entities[entity]["type"])._param_decls
         except DGraphError as exc:
-            raise doc.error(str(exc), ("entities", entity, "type")) from None
+            raise doc.error(str(exc), ("entities", entity, "type"), exc) from None
         if is_param:
             params.setdefault(entity, {})[name] = value
         else:
@@ -248,11 +280,11 @@ def _make_entity(doc: _Document, name: str, type_name: str, params: dict[str, An
     try:
         cls = get_type(type_name)
     except DGraphError as exc:
-        raise doc.error(str(exc), (*where, "type") if path is None else where) from None
+        raise doc.error(str(exc), (*where, "type") if path is None else where, exc) from None
     try:
         return cls(name, **params)
     except DGraphError as exc:
-        raise doc.error(str(exc), (*where, "params") if path is None else where) from None
+        raise doc.error(str(exc), (*where, "params") if path is None else where, exc) from None
     except Exception as exc:  # an entity constructor failing on odd values must not crash the loader
         raise doc.error(f"{name} ({type_name}) could not be built: {type(exc).__name__}: {exc}",
                         (*where, "params") if path is None else where) from None
@@ -262,13 +294,13 @@ def _set_constant(graph: Graph, doc: _Document, key: str, value: Any, path: tupl
     try:
         sig = graph.signal(key)
     except DGraphError as exc:
-        raise doc.error(str(exc), path) from None
+        raise doc.error(str(exc), path, exc) from None
     if not isinstance(sig, Input):
         raise doc.error(f"{key} is an output: only inputs (and parameters, with --set) can be set", path)
     try:
         sig.set(value)
     except DGraphError as exc:
-        raise doc.error(str(exc), path) from None
+        raise doc.error(str(exc), path, exc) from None
 
 
 def to_plain(value: Any, where: str) -> Any:

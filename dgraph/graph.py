@@ -7,6 +7,7 @@ validates the whole graph, and drives the device loop (:mod:`dgraph.loop`).
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Iterable, Iterator
 from typing import Any
@@ -33,15 +34,18 @@ class Graph:
     """
 
     def __init__(self, dt: float = 0.001, name: str = "graph"):
-        if not dt > 0:
-            raise GraphError(f"dt must be positive, got {dt!r}")
-        self.dt = float(dt)
+        try:
+            self.dt = float(dt)
+        except (TypeError, ValueError, OverflowError):
+            raise GraphError(f"dt must be a number, got {dt!r}") from None
+        if not (self.dt > 0 and math.isfinite(self.dt)):
+            raise GraphError(f"dt must be positive and finite, got {dt!r}")
         self.name = name
         self.clock = Clock()
         self.t = 0
         self.duration: float | None = None
         self._entities: dict[str, Entity] = {}
-        self._roles: dict[str, list[Entity]] | None = None
+        self._roles: dict[str, list[Any]] | None = None
         self._check_dependencies = False
 
     # -- entities -------------------------------------------------------------------------
@@ -78,8 +82,8 @@ class Graph:
         self.clock.time_varying = [o for o in self.clock.time_varying if o not in mine]
         self.clock.held = [o for o in self.clock.held if o not in mine]
         for sig in mine:
-            if isinstance(sig, Output):
-                sig._held = False
+            if isinstance(sig, Output) and sig._held:
+                sig.release_hold()  # its readers must not keep a held value forever
         del self._entities[name]
         entity.graph = None
         entity._attach_clock(Clock())
@@ -121,7 +125,8 @@ class Graph:
                 raise GraphError(f"signal {key.full_name} is not in this graph")
             return key
         if not isinstance(key, str) or key.count(".") != 1:
-            raise GraphError(f"expected 'entity.signal', got {key!r}")
+            raise GraphError(f"expected 'entity.signal', got {key!r}",
+                             entity=key.split(".")[0] if isinstance(key, str) else None)
         return self[key]
 
     # -- plugs ----------------------------------------------------------------------------
@@ -150,7 +155,7 @@ class Graph:
         """Disconnect input ``target`` from its source."""
         inp = self.signal(target)
         if not isinstance(inp, Input):
-            raise PlugError(f"{inp.full_name} is not an input")
+            raise PlugError(f"{inp.full_name} is not an input", entity=inp.entity.name, signal=inp.name)
         inp.unplug()
 
     def plugs(self) -> list[tuple[str, str]]:
@@ -258,8 +263,9 @@ class Graph:
         return profile(self, ticks)
 
     # -- loop -----------------------------------------------------------------------------
-    def roles(self) -> dict[str, list[Entity]]:
-        """Entities the loop treats specially: ``devices``, ``stateful`` and ``observers``."""
+    def roles(self) -> dict[str, list[Any]]:
+        """What the loop treats specially: ``devices``, ``stateful`` and ``observers`` entities,
+        and ``periodic`` outputs (sampled by the loop at the start of each period window)."""
         if self._roles is None:
             from dgraph.device import Device
             ents = list(self)
@@ -267,6 +273,7 @@ class Graph:
                 "devices": [e for e in ents if isinstance(e, Device)],
                 "stateful": [e for e in ents if e.has_state],
                 "observers": [e for e in ents if e.observes],
+                "periodic": [o for o in self._computed_outputs() if o.period > 1],
             }
         return self._roles
 

@@ -3,20 +3,22 @@
 One tick at ``t``:
 
 1. ``before`` hooks of every device, at ``t``;
-2. every stateful entity prepares its next state from the values at ``t`` (devices pull
-   their control here, so this is where the graph is evaluated);
-3. observers (recorders) read what they record, at ``t``;
-4. every stateful entity commits its state, stamped ``t + 1``;
-5. ``after`` hooks of every device, at ``t + 1``.
+2. periodic outputs (``period=N``) whose window starts at ``t`` (``t % N == 0``) are sampled,
+   so that what they hold never depends on who reads them when;
+3. every stateful entity prepares (stages) its next state from the values at ``t`` (devices
+   pull their control here, so this is where the graph is evaluated);
+4. observers (recorders) read what they record, at ``t``;
+5. every stateful entity commits its staged state, stamped ``t + 1`` (this cannot fail);
+6. ``after`` hooks of every device, at ``t + 1``.
 
-Nothing is committed if steps 1-3 fail, so a failing hook or computation leaves the state
+Nothing is committed if steps 1-4 fail, so a failing hook or computation leaves every state
 at ``t``, consistent, and the loop can be resumed.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from dgraph.errors import GraphError
 
@@ -24,6 +26,9 @@ if TYPE_CHECKING:
     from dgraph.device import Device
     from dgraph.entity import Entity
     from dgraph.graph import Graph
+
+Roles = dict[str, list[Any]]
+"""``devices``, ``stateful`` and ``observers`` entities and ``periodic`` outputs of a graph."""
 
 PROGRESS_MIN_TICKS = 5000
 """Runs at least this long show a progress bar by default."""
@@ -34,14 +39,17 @@ def call_phase(entity: Entity, phase: str, t: int) -> None:
     getattr(entity, phase)(t)
 
 
-def transition(devices: Sequence[Device], stateful: Sequence[Entity], observers: Sequence[Entity],
-               t: int, call: Callable[[Entity, str, int], None] = call_phase) -> None:
-    """Steps 1-4 of a tick from ``t``: after it, every state is stamped ``t + 1``.
+def transition(roles: Roles, t: int, call: Callable[[Entity, str, int], None] = call_phase) -> None:
+    """Steps 1-5 of a tick from ``t``: after it, every state is stamped ``t + 1``.
 
     ``call`` runs each entity phase (the profiler passes a timed version).
     """
+    devices, stateful, observers = roles["devices"], roles["stateful"], roles["observers"]
     for device in devices:
         device.before.run(t)
+    for output in roles["periodic"]:
+        if t % output.period == 0:
+            output.sample(t)
     for entity in stateful:
         call(entity, "prepare_state", t)
     for entity in observers:
@@ -51,7 +59,7 @@ def transition(devices: Sequence[Device], stateful: Sequence[Entity], observers:
 
 
 def run_after_hooks(devices: Sequence[Device], t_next: int) -> None:
-    """Step 5 of a tick: the ``after`` hooks, at the new tick."""
+    """Step 6 of a tick: the ``after`` hooks, at the new tick."""
     for device in devices:
         device.after.run(t_next)
 
@@ -59,7 +67,7 @@ def run_after_hooks(devices: Sequence[Device], t_next: int) -> None:
 def step(graph: Graph, call: Callable[[Entity, str, int], None] = call_phase) -> None:
     """Advance ``graph`` by one tick."""
     roles = graph.roles()
-    transition(roles["devices"], roles["stateful"], roles["observers"], graph.t, call)
+    transition(roles, graph.t, call)
     graph.t += 1
     run_after_hooks(roles["devices"], graph.t)
 

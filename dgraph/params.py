@@ -15,6 +15,10 @@ import numpy as np
 from dgraph.errors import ParamError
 
 REQUIRED = object()
+MAX_SIZE = 1_000_000
+"""Largest vector size a parameter may ask for."""
+MAX_PORTS = 256
+"""Largest number of per-instance ports (variadic inputs) a parameter may ask for."""
 
 
 def _to_float(v: Any) -> float:
@@ -84,12 +88,15 @@ class Param:
         doc: one line shown by ``dgraph entities``.
         choices: allowed values.
         optional: ``None`` is accepted in addition to ``kind``.
+        minimum, maximum: bounds of a number (sizes are bounded so that a file cannot ask
+            for a graph that exhausts the machine).
     """
 
-    __slots__ = ("choices", "default", "doc", "kind", "name", "optional")
+    __slots__ = ("choices", "default", "doc", "kind", "maximum", "minimum", "name", "optional")
 
     def __init__(self, default: Any = REQUIRED, kind: str = "float", doc: str = "",
-                 choices: Sequence[Any] | None = None, optional: bool = False):
+                 choices: Sequence[Any] | None = None, optional: bool = False,
+                 minimum: float | None = None, maximum: float | None = None):
         if kind not in KINDS:
             raise ParamError(f"unknown parameter kind {kind!r}; expected one of {sorted(KINDS)}")
         self.default = default
@@ -97,6 +104,8 @@ class Param:
         self.doc = doc
         self.choices = tuple(choices) if choices is not None else None
         self.optional = optional or default is None
+        self.minimum = minimum
+        self.maximum = maximum
         self.name = ""
 
     @property
@@ -114,6 +123,9 @@ class Param:
             raise ParamError(f"{entity}: parameter {self.name!r}: {exc}", entity=entity) from None
         if self.choices is not None and out not in self.choices:
             raise ParamError(f"{entity}: parameter {self.name!r} must be one of {list(self.choices)}, "
+                             f"got {value!r}", entity=entity)
+        if (self.minimum is not None and out < self.minimum) or (self.maximum is not None and out > self.maximum):
+            raise ParamError(f"{entity}: parameter {self.name!r} must be within [{self.minimum}, {self.maximum}], "
                              f"got {value!r}", entity=entity)
         return out
 

@@ -45,10 +45,10 @@ class Ticker(dg.Device):
         self.x.set(self.x0, 0)
 
     def prepare_state(self, t):
-        self._next = self.x(t) + 1.0
+        self.x.stage(self.x(t) + 1.0)
 
     def commit_state(self, t_next):
-        self.x.set(self._next, t_next)
+        self.x.commit(t_next)
 
 
 class Clocked(dg.Entity):

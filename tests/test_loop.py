@@ -76,10 +76,10 @@ def test_failure_while_pulling_control_commits_nothing(graph):
         s = dg.State(shape=(), initial=0.0)
 
         def prepare_state(self, t):
-            self._next = self.u(t)
+            self.s.stage(self.u(t))
 
         def commit_state(self, t_next):
-            self.s.set(self._next, t_next)
+            self.s.commit(t_next)
 
     graph.add(Follower("second"))
     with pytest.raises(dg.UnpluggedInputError, match=r"second\.u"):

@@ -37,14 +37,15 @@ class Clock:
         self.inner = 0.0
 
     def advance(self, t: int) -> None:
-        """Move to tick ``t``: invalidate time-varying outputs and release expired holds."""
+        """Move to tick ``t``: invalidate time-varying outputs and release the holds of periodic
+        outputs whose period window has ended."""
         self.t = t
         for output in self.time_varying:
             output.invalidate()
         if self.held:
             still_held = []
             for output in self.held:
-                if t >= output.time + output.period or t < output.time:
+                if t >= output.next_sample() or t < output.time:
                     output.release_hold()
                 else:
                     still_held.append(output)

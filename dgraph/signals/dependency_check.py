@@ -45,13 +45,16 @@ def guard(output: Output) -> None:
     view = {name: port if name in allowed else _Undeclared(port, output) for name, port in ports.items()}
     original = output._fn
 
-    def checked(t: int) -> Any:
+    def checked(t: int) -> Any:  # attribute access and entity.signal()/inputs/ports all see the view
         saved = {name: entity.__dict__[name] for name in ports}
+        saved_signals = entity._signals
         entity.__dict__.update(view)
+        entity._signals = view
         try:
             return original(t)
         finally:
             entity.__dict__.update(saved)
+            entity._signals = saved_signals
 
     output._unguarded = original
     output._fn = checked

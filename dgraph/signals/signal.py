@@ -153,8 +153,8 @@ class Output(Signal):
         return self._value
 
     def _recompute(self, t: int) -> Any:
-        if self._time is not None and self.period > 1 and self._time <= t < self._time + self.period:
-            return self._hold()
+        if self.period > 1 and self._time is not None and t - t % self.period <= self._time <= t:
+            return self._hold()  # already sampled in this period window
         if self._computing:
             raise ComputeError(f"{self.full_name} was read during its own computation at tick {t} "
                                "(an undeclared algebraic loop)", entity=self.entity.name, signal=self.name)
@@ -201,6 +201,20 @@ class Output(Signal):
         self._stale = True
         _invalidate_all(self._down)
 
+    def next_sample(self) -> int:
+        """First tick of the period window after the last sample (periodic outputs)."""
+        return (self._time // self.period + 1) * self.period if self._time is not None else 0
+
+    def sample(self, t: int) -> None:
+        """Loop-driven sampling of a periodic output at the start of a window (``t % period == 0``).
+
+        Computes if stale; if the cached value is still valid it is stamped ``t``, so that the
+        window's sample does not depend on who reads when, or on the cache being on.
+        """
+        self(t)
+        if not self._stale and self._time is not None and self._time < t:
+            self._time = t
+
     # -- staleness --------------------------------------------------------------------------
     def invalidate(self) -> None:
         """Mark this output and everything downstream of it stale (stops at stale nodes)."""
@@ -213,7 +227,7 @@ class Output(Signal):
         if self._time is None:
             return False
         clock = self._clock
-        if clock.t is not None and clock.t >= self._time + self.period:
+        if clock.t is not None and clock.t >= self.next_sample():
             return False
         if not self._held:
             self._held = True
@@ -257,19 +271,23 @@ def _invalidate_all(nodes: list[Output]) -> None:
 
 
 class State(Output):
-    """An output whose value the entity sets during the tick transition (``set(value, t)``).
+    """An output whose value the entity sets during the tick transition.
 
-    Device state and delay memory are States. Reading never computes; setting a new value
-    invalidates everything downstream. Nothing computed at a tick flows into a State, so a
-    loop closed through a State is legal.
+    Device state and delay memory are States. An entity stages the next value in
+    ``prepare_state`` (``state.stage(value)``: checked there, so a bad value fails before
+    anything is committed) and publishes it in ``commit_state`` (``state.commit(t + 1)``);
+    ``state.set(value, t)`` does both at once (initial values). Reading never computes;
+    publishing invalidates everything downstream. Nothing computed at a tick flows into a
+    State, so a loop closed through a State is legal.
     """
 
-    __slots__ = ("initial",)
+    __slots__ = ("_staged", "initial")
 
     def __init__(self, *, shape: ShapeDecl = None, dtype: str = "float", initial: Any = None,
                  labels: Sequence[str] | None = None, doc: str = ""):
         super().__init__(None, shape=shape, dtype=dtype, depends=(), labels=labels, doc=doc)
         self.initial = initial
+        self._staged: Any = _UNSET
 
     def bind(self, entity: Entity, name: str) -> State:
         """Return this template's copy for ``entity``."""
@@ -290,11 +308,23 @@ class State(Output):
                                       entity=self.entity.name, signal=self.name)
         return self._value
 
-    def set(self, value: Any, t: int) -> None:
-        """Store ``value`` as the state at tick ``t`` and invalidate everything downstream."""
-        self._value = self.spec.coerce(value, self.full_name)
+    def stage(self, value: Any) -> None:
+        """Check and hold ``value`` as the next state (raises :class:`SpecError` here, not at commit)."""
+        self._staged = _coerce(self, value)
+
+    def commit(self, t: int) -> None:
+        """Publish the staged value as the state at tick ``t``; invalidate everything downstream."""
+        if self._staged is _UNSET:
+            raise DGraphError(f"{self.full_name}: commit at tick {t} without a staged value",
+                              entity=self.entity.name, signal=self.name)
+        self._value, self._staged = self._staged, _UNSET
         self._time = t
         _invalidate_all(self._down)
+
+    def set(self, value: Any, t: int) -> None:
+        """Stage and commit at once: the state at tick ``t`` is ``value``."""
+        self.stage(value)
+        self.commit(t)
 
     def invalidate(self) -> None:
         """A state never becomes stale: it changes only when its entity sets it."""
@@ -332,7 +362,7 @@ class Input(Signal):
         Input.__init__(inp, default=self.default)
         self._bind_common(inp, entity, name)
         if inp.has_default:
-            inp._value = inp.spec.coerce(self.default, f"default of {inp.full_name}")
+            inp._value = _coerce(inp, self.default)
             inp._has_value = True
             inp.default = inp._value
         return inp
@@ -355,13 +385,14 @@ class Input(Signal):
         """Hold the constant ``value`` (unplugs first). Dependents recompute once."""
         if self.entity is None:
             raise self._unbound()
-        coerced = self.spec.coerce(value, self.full_name)
+        coerced = _coerce(self, value)
         if self._source is not None:
             self.unplug()
         self._value = coerced
         self._has_value = True
         self.is_set = True
-        self._set_time = self.entity._clock.t
+        graph = self.entity.graph
+        self._set_time = graph.t if graph is not None else self.entity._clock.t
         _invalidate_all(self._subs)
 
     def reset(self) -> None:
@@ -420,6 +451,14 @@ class Input(Signal):
     def time(self) -> int | None:
         """The stamp of the plugged output's last value, or the tick at which the constant was set."""
         return self._source.time if self._source is not None else self._set_time
+
+
+def _coerce(sig: Signal, value: Any) -> Any:
+    """``sig.spec.coerce`` with the error attributed to the signal's entity and name."""
+    try:
+        return sig.spec.coerce(value, sig.full_name)
+    except SpecError as exc:
+        raise SpecError(str(exc), entity=sig.entity.name if sig.entity else None, signal=sig.name) from None
 
 
 def _short(value: Any) -> str:

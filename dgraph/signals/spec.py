@@ -79,12 +79,13 @@ class Spec:
         """
         if self.dtype == "object":
             return value
-        scalar = self.shape == () or (self.shape is None and np.ndim(value) == 0)
         try:
-            if scalar:
+            if self.shape == () or (self.shape is None and np.ndim(value) == 0):
                 return self._coerce_scalar(value, where)
             array = np.array(value, dtype=_NUMPY[self.dtype])
-        except (TypeError, ValueError) as exc:
+        except SpecError:
+            raise
+        except (TypeError, ValueError, OverflowError) as exc:
             raise SpecError(f"{where}: cannot convert {_short(value)} to {self!r}: {exc}") from None
         if not self._shape_ok(array.shape):
             raise SpecError(f"{where}: value of shape {array.shape} does not match {self!r}")
@@ -103,6 +104,8 @@ class Spec:
                 raise SpecError(f"{where}: value is NaN")
             return out
         if self.dtype == "int":
+            if not isinstance(value, (int, float, np.integer, np.floating)) or not math.isfinite(value):
+                raise SpecError(f"{where}: expected an int, got {_short(value)}")
             out = int(value)
             if out != value or isinstance(value, bool):
                 raise SpecError(f"{where}: expected an int, got {_short(value)}")
@@ -113,24 +116,28 @@ class Spec:
 
     def problem(self, value: Any) -> str | None:
         """What is wrong with a computed value (type, shape, NaN), or None. Cheap when fine."""
-        if type(value) is float:
+        if self.dtype == "object":
+            return None
+        if type(value) is float and self.dtype == "float":
             if value != value:
                 return "computed NaN"
             if self.shape is not None and self.shape != ():
                 return f"computed a scalar, declared {self!r}"
-            return None
-        if self.dtype == "object":
             return None
         if isinstance(value, np.ndarray):
             if not self._shape_ok(value.shape):
                 return f"computed shape {value.shape}, declared {self!r}"
             if value.dtype.kind == "f" and np.isnan(value).any():
                 return "computed a value containing NaN"
+            if value.dtype.kind != _KIND[self.dtype] and not (self.dtype == "float" and value.dtype.kind in "iub"):
+                return f"computed an array of {value.dtype}, declared {self!r}"
             return None
+        if np.ndim(value) != 0 or isinstance(value, (list, tuple)):
+            return f"computed a {type(value).__name__}, declared {self!r}: return a numpy array or a scalar"
         try:
             self._coerce_scalar(value, "value")
-        except SpecError as exc:
-            return str(exc)
+        except SpecError:
+            return f"computed {_short(value)}, declared {self!r}"
         return None
 
     def check(self, value: Any, where: str) -> None:
@@ -141,6 +148,7 @@ class Spec:
 
 
 _NUMPY = {"float": np.float64, "int": np.int64, "bool": np.bool_}
+_KIND = {"float": "f", "int": "i", "bool": "b"}
 
 
 def _short(value: Any) -> str:

@@ -120,3 +120,20 @@ def test_graph_as_context_manager_flushes_on_error(tmp_path):
         g.run(ticks=5)
     assert np.load(tmp_path / "run.npz")["tick"].tolist() == list(range(10))
     assert read_series(str(tmp_path / "run.rrd"))["/signals/dev/x"][0].tolist() == list(range(10))
+
+
+def test_columns_stay_aligned_after_a_failed_read_and_duplicates_are_refused(tmp_path):
+    g = dg.Graph(name="../../escape")
+    g.add(Ticker("dev"))
+    g.add(Scale("a"))
+    rec = g.add(Recorder("rec", signals=["dev.x", "a.y"]))
+    with pytest.raises(dg.UnpluggedInputError):
+        g.step()  # a.u is unplugged: nothing recorded for that tick
+    g.plug("dev.x", "a.u")
+    g.run(ticks=2)
+    g.close()
+    data = rec.data()
+    assert data["tick"].tolist() == [0, 1] and data["dev.x"].tolist() == [0.0, 1.0] and len(data["a.y"]) == 2
+    assert rec.rrd_path == "out/_.._escape.rrd" and (tmp_path / "out" / "_.._escape.rrd").exists()
+    with pytest.raises(dg.ParamError, match=r"recorded twice: dev\.x"):
+        Recorder("dup", signals=["dev.x", "a.y", "dev.x"])

@@ -55,11 +55,17 @@ def build(plan, sources_seed: int) -> tuple[dg.Graph, list[dg.Output]]:
     return g, outs
 
 
-def trace(plan, reads, seed: int, cache: bool) -> list[float]:
+def trace(plan, reads, seed: int, cache: bool, changes=()) -> list[float]:
+    """Read the chosen outputs each tick; at the ticks in ``changes`` set every gain constant."""
     g, outs = build(plan, seed)
     g.cache_enabled = cache
+    gains = [e.gain for e in g if isinstance(e, Gain)]
     values = []
-    for tick_reads in reads:
+    for tick, tick_reads in enumerate(reads):
+        for when, value in changes:
+            if when == tick:
+                for gain in gains:
+                    gain.set(value)
         for r in tick_reads:
             values.append(outs[r % len(outs)](g.t))
         g.step()
@@ -73,10 +79,11 @@ node = st.tuples(st.sampled_from(KINDS), st.tuples(st.integers(0, 50), st.intege
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(plan=st.lists(node, min_size=1, max_size=14),
        reads=st.lists(st.lists(st.integers(0, 60), max_size=5), min_size=1, max_size=25),
-       seed=st.integers(0, 5))
-def test_cache_off_gives_identical_results(plan, reads, seed):
-    cached = trace(plan, reads, seed, cache=True)
-    uncached = trace(plan, reads, seed, cache=False)
+       seed=st.integers(0, 5),
+       changes=st.lists(st.tuples(st.integers(0, 25), st.floats(-2.0, 2.0, allow_nan=False)), max_size=4))
+def test_cache_off_gives_identical_results(plan, reads, seed, changes):
+    cached = trace(plan, reads, seed, cache=True, changes=changes)
+    uncached = trace(plan, reads, seed, cache=False, changes=changes)
     assert np.array_equal(np.array(cached), np.array(uncached))
 
 

@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
+from dgraph.params import MAX_SIZE
 
 
 def _load_model(model: Any) -> Any:
@@ -38,7 +39,7 @@ class KinematicDevice(dg.Device):
 
     control_mode = dg.Param("velocity", kind="str", choices=("velocity", "acceleration"),
                          doc="what the control input commands")
-    size = dg.Param(None, kind="int", doc="state size for a vector state (no model)")
+    size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="state size for a vector state (no model)")
     model = dg.Param(None, kind="object", doc="example-robot-data robot name or pinocchio.Model")
     q0 = dg.Param(None, kind="vector", doc="initial configuration (default: neutral / zeros)")
     v0 = dg.Param(None, kind="vector", doc="initial velocity (default: zeros)")
@@ -84,10 +85,10 @@ class KinematicDevice(dg.Device):
         """Pull ``control(t)`` and integrate one tick."""
         u = self.control(t)
         v_next = u if self.control_mode == "velocity" else self.v(t) + self.dt * u
-        self._next = (self._integrate(self.q(t), self.dt * v_next), v_next)
+        self.q.stage(self._integrate(self.q(t), self.dt * v_next))
+        self.v.stage(v_next)
 
     def commit_state(self, t_next: int) -> None:
         """Stamp ``q`` and ``v`` at ``t + 1``."""
-        q_next, v_next = self._next
-        self.q.set(q_next, t_next)
-        self.v.set(v_next, t_next)
+        self.q.commit(t_next)
+        self.v.commit(t_next)

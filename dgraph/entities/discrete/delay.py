@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import dgraph as dg
 from dgraph.entities.discrete.state_shape import initial_state, state_shape
+from dgraph.params import MAX_SIZE
 
 
 @dg.register
@@ -17,7 +16,7 @@ class Delay(dg.Entity):
     """
 
     has_state = True
-    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+    size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
     initial = dg.Param(None, kind="vector", doc="output before the first tick (default 0)")
     input = dg.Input(shape=state_shape)
     output = dg.State(shape=state_shape, doc="the input of the previous tick")
@@ -28,8 +27,8 @@ class Delay(dg.Entity):
 
     def prepare_state(self, t: int) -> None:
         """Sample the input at ``t``."""
-        self._next: Any = self.input(t)
+        self.output.stage(self.input(t))
 
     def commit_state(self, t_next: int) -> None:
         """Publish the sample as the output at ``t + 1``."""
-        self.output.set(self._next, t_next)
+        self.output.commit(t_next)

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import dgraph as dg
 from dgraph.entities.discrete.state_shape import initial_state, state_shape
+from dgraph.params import MAX_SIZE
 
 
 @dg.register
@@ -17,7 +16,7 @@ class Integrator(dg.Entity):
     """
 
     has_state = True
-    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+    size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
     initial = dg.Param(None, kind="vector", doc="initial value (default 0)")
     dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
     input = dg.Input(shape=state_shape, doc="the derivative")
@@ -29,8 +28,8 @@ class Integrator(dg.Entity):
 
     def prepare_state(self, t: int) -> None:
         """Compute ``x + dt u`` at ``t``."""
-        self._next: Any = self.output(t) + self.dt * self.input(t)
+        self.output.stage(self.output(t) + self.dt * self.input(t))
 
     def commit_state(self, t_next: int) -> None:
         """Publish the integral at ``t + 1``."""
-        self.output.set(self._next, t_next)
+        self.output.commit(t_next)

@@ -6,6 +6,7 @@ from typing import Any
 
 import dgraph as dg
 from dgraph.entities.operators.shape import vector_shape
+from dgraph.params import MAX_PORTS, MAX_SIZE
 
 
 @dg.register
@@ -17,14 +18,12 @@ class Add(dg.Entity):
     Inputs: ``in0 .. in{n-1}``. Outputs: ``output``.
     """
 
-    n_inputs = dg.Param(2, kind="int", doc="number of summed inputs")
+    n_inputs = dg.Param(2, kind="int", minimum=1, maximum=MAX_PORTS, doc="number of summed inputs")
     coefficients = dg.Param(None, kind="vector", doc="weight of each input (default: all 1)")
-    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+    size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
 
     def configure(self) -> None:
         """Declare the inputs ``in0 .. in{n-1}`` and check the coefficients."""
-        if self.n_inputs < 1:
-            raise dg.ParamError(f"{self.name}: n_inputs must be >= 1", entity=self.name)
         coeffs = [1.0] * self.n_inputs if self.coefficients is None else list(self.coefficients.ravel())
         if len(coeffs) != self.n_inputs:
             raise dg.ParamError(f"{self.name}: {len(coeffs)} coefficients for {self.n_inputs} inputs",

@@ -8,6 +8,7 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.operators.shape import vector_shape
+from dgraph.params import MAX_SIZE
 
 
 @dg.register
@@ -19,7 +20,7 @@ class Gain(dg.Entity):
     Outputs: ``output``.
     """
 
-    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+    size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
     input = dg.Input(shape=vector_shape, doc="the signal to scale")
     gain = dg.Input(shape=None, default=1.0, doc="scalar, diagonal (vector) or matrix gain")
 

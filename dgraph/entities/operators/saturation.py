@@ -8,6 +8,7 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.operators.shape import vector_shape
+from dgraph.params import MAX_SIZE
 
 
 @dg.register
@@ -18,7 +19,7 @@ class Saturation(dg.Entity):
     (scalars or vectors, default -inf / +inf). Outputs: ``output``.
     """
 
-    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+    size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
     input = dg.Input(shape=vector_shape)
     lower = dg.Input(shape=None, default=-np.inf, doc="lower bound (scalar or vector)")
     upper = dg.Input(shape=None, default=np.inf, doc="upper bound (scalar or vector)")

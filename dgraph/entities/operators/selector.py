@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
+from dgraph.params import MAX_SIZE
 
 
 @dg.register
@@ -17,7 +18,7 @@ class Selector(dg.Entity):
     Inputs: ``input`` (size). Outputs: ``output`` (len(indices)).
     """
 
-    size = dg.Param(kind="int", doc="size of the input vector")
+    size = dg.Param(kind="int", minimum=1, maximum=MAX_SIZE, doc="size of the input vector")
     indices = dg.Param(kind="int_list", doc="indices of the kept components")
     input = dg.Input(shape=("size",))
 

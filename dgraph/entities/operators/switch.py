@@ -6,6 +6,7 @@ from typing import Any
 
 import dgraph as dg
 from dgraph.entities.operators.shape import vector_shape
+from dgraph.params import MAX_PORTS, MAX_SIZE
 
 
 @dg.register
@@ -16,14 +17,12 @@ class Switch(dg.Entity):
     Inputs: ``selection`` (int, default 0), ``in0 .. in{n-1}``. Outputs: ``output``.
     """
 
-    n_inputs = dg.Param(2, kind="int", doc="number of inputs")
-    size = dg.Param(None, kind="int", doc="vector size (None: scalar)")
+    n_inputs = dg.Param(2, kind="int", minimum=1, maximum=MAX_PORTS, doc="number of inputs")
+    size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
     selection = dg.Input(shape=(), dtype="int", default=0, doc="index of the routed input")
 
     def configure(self) -> None:
         """Declare the inputs ``in0 .. in{n-1}``."""
-        if self.n_inputs < 1:
-            raise dg.ParamError(f"{self.name}: n_inputs must be >= 1", entity=self.name)
         for i in range(self.n_inputs):
             self.declare(f"in{i}", dg.Input(shape=vector_shape))
 

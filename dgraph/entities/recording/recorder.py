@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -10,6 +11,12 @@ import numpy as np
 import dgraph as dg
 from dgraph.entities.recording.rerun_stream import RerunStream
 from dgraph.signals.signal import Signal
+
+
+def safe_file_stem(name: str) -> str:
+    """``name`` reduced to a file name that stays in its directory (no separators, no leading dot)."""
+    stem = re.sub(r"[^A-Za-z0-9_.\-]", "_", name).lstrip(".")
+    return stem or "graph"
 
 
 def component_names(sig: Signal, shape: tuple[int, ...]) -> list[str]:
@@ -48,6 +55,9 @@ class Recorder(dg.Entity):
 
     def configure(self) -> None:
         """Check the parameters."""
+        repeated = sorted({name for name in self.signals if self.signals.count(name) > 1})
+        if repeated:
+            raise dg.ParamError(f"{self.name}: signals recorded twice: {', '.join(repeated)}", entity=self.name)
         if self.decimation < 1 or self.flush_every < 1:
             raise dg.ParamError(f"{self.name}: decimation and flush_every must be >= 1", entity=self.name)
         self._sources: list[Signal] | None = None
@@ -77,7 +87,7 @@ class Recorder(dg.Entity):
             raise dg.GraphError("; ".join(problems), entity=self.name)
         self._sources = [self.graph.signal(name) for name in self.signals]
         if self.rerun == "save" and not self.rrd_path:
-            self.rrd_path = f"out/{self.graph.name}.rrd"
+            self.rrd_path = f"out/{safe_file_stem(self.graph.name)}.rrd"
         if self.rerun != "off":
             self._stream = RerunStream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt)
         return self._sources
@@ -85,9 +95,9 @@ class Recorder(dg.Entity):
     def observe(self, t: int) -> None:
         """Read every recorded signal at ``t`` and store the values."""
         sources = self._sources if self._sources is not None else self._open()
+        values = [sig(t) for sig in sources]  # all or nothing: the columns stay aligned with ticks
         self.ticks.append(t)
-        for name, sig in zip(self.signals, sources, strict=False):
-            value = sig(t)
+        for name, value in zip(self.signals, values, strict=True):
             self._columns[name].append(value.copy() if isinstance(value, np.ndarray) else value)
         if self._stream is not None:
             self._pending += 1
