@@ -66,7 +66,7 @@ def explain(graph: Graph, sig: Signal) -> str:
         lines.append("  will recompute at the next tick because:")
         lines.extend(f"    - {r}" for r in sorted(reasons))
         if sig.period > 1:
-            lines.append(f"    (at most every {sig.period} ticks: held until tick {(sig.time or 0) + sig.period})")
+            lines.append(f"    (once per {sig.period}-tick window: the next starts at tick {sig.next_sample()})")
     else:
         lines.append("  will NOT recompute at the next tick: nothing it depends on changes by itself")
     if constants:

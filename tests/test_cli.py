@@ -68,6 +68,15 @@ def test_check_reports_problems(tmp_path, capsys):
     assert "OK (7 entities, 7 plugs" in capsys.readouterr().out
 
 
+def test_profile_lists_every_entity(tmp_path, capsys):
+    assert main(["profile", PD, "--ticks", "200"]) == 0
+    out = capsys.readouterr().out
+    assert "200 ticks" in out and "us per tick" in out
+    for name in ("robot", "error", "kp", "kd", "command", "recorder"):
+        assert name in out
+    assert not (tmp_path / "out").exists()  # profiling records nothing
+
+
 def test_show_and_entities(tmp_path, capsys):
     assert main(["show", PD, "--format", "mermaid"]) == 0
     assert "flowchart LR" in capsys.readouterr().out
