@@ -41,29 +41,34 @@ def _parse_sets(items: list[str]) -> dict[str, Any]:
     return out
 
 
-def _recorder_overrides(path: str, args: argparse.Namespace) -> dict[str, Any]:
-    """Point every recorder of the file at the sinks chosen on the command line."""
+def _recorder_names(path: str) -> tuple[list[str], str]:
+    """The recorders a graph file declares, and its file-safe name."""
     from dgraph.entities.recording.recorder import safe_file_stem
-    from dgraph.files import declared_entities, parse
+    from dgraph.files import declared_entities, parse, read_text
 
-    data, _ = parse(Path(path).read_text(encoding="utf-8"), path)
+    data, _ = parse(read_text(path), path)
     names = [n for n, spec in declared_entities(data).items() if spec["type"] == "Recorder"]
-    stem = safe_file_stem(data.get("name", Path(path).stem))
-    mode, rrd = _rerun_mode(args.rerun, stem)
+    return names, safe_file_stem(data.get("name", Path(path).stem))
+
+
+def _recorder_overrides(path: str, args: argparse.Namespace) -> dict[str, Any]:
+    """Point every recorder of the file at the sinks chosen on the command line (what the
+    command line does not say is left as the file says)."""
+    names, stem = _recorder_names(path)
     out: dict[str, Any] = {}
     for name in names:
         suffix = "" if len(names) == 1 else f"_{name}"
-        out[f"{name}.rerun"] = mode
-        if mode == "save":
-            out[f"{name}.rrd_path"] = str(Path(rrd).with_stem(Path(rrd).stem + suffix))
+        if args.rerun:
+            mode, rrd = _rerun_mode(args.rerun, stem)
+            out[f"{name}.rerun"] = mode
+            if mode == "save":
+                out[f"{name}.rrd_path"] = str(Path(rrd).with_stem(Path(rrd).stem + suffix))
         if args.npz:
             out[f"{name}.npz_path"] = str(Path(args.npz).with_stem(Path(args.npz).stem + suffix))
     return out
 
 
-def _rerun_mode(option: list[str] | None, stem: str) -> tuple[str, str | None]:
-    if not option:
-        return "save", f"out/{stem}.rrd"
+def _rerun_mode(option: list[str], stem: str) -> tuple[str, str | None]:
     mode = option[0]
     if mode == "save":
         return "save", option[1] if len(option) > 1 else f"out/{stem}.rrd"
@@ -98,7 +103,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         for entity in graph:
             if entity.type_name == "Recorder":
                 for label, target in (("rerun", entity.rrd_path), ("npz", entity.npz_path)):
-                    if target and (label == "npz" or entity.rerun == "save"):
+                    if target and (label == "npz" or entity.rerun == "save") and Path(target).is_file():
                         print(f"  {entity.name}: {label} -> {target}")
     return 0
 
@@ -121,10 +126,8 @@ def cmd_check(args: argparse.Namespace) -> int:
 def cmd_profile(args: argparse.Namespace) -> int:
     """Run a graph file with timing on and print where each tick's time goes (no recording)."""
     import dgraph
-    from dgraph.files import declared_entities, parse
 
-    data, _ = parse(Path(args.file).read_text(encoding="utf-8"), args.file)
-    quiet = {f"{n}.rerun": "off" for n, s in declared_entities(data).items() if s["type"] == "Recorder"}
+    quiet = {f"{name}.rerun": "off" for name in _recorder_names(args.file)[0]}
     graph = dgraph.load(args.file, {**quiet, **_parse_sets(args.set)})
     graph.validate()
     with graph:
@@ -163,7 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="dgraph", description="Run, check and draw dgraph graph files.")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a graph file")
-    run.add_argument("file")
+    run.add_argument("file", nargs="?")
     length = run.add_mutually_exclusive_group()
     length.add_argument("--duration", type=float, help="seconds of control time")
     length.add_argument("--ticks", type=int, help="number of ticks")
@@ -194,12 +197,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _take_file_back(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
+    """``--rerun off FILE`` lets --rerun swallow FILE: give it back."""
+    if getattr(args, "file", "") is None:
+        tokens = args.rerun or []
+        if len(tokens) > 1 and tokens[-1].endswith((".yaml", ".yml")):
+            args.file = tokens.pop()
+        else:
+            parser.error("the following arguments are required: file")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``dgraph`` command."""
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    _take_file_back(args, parser)
     try:
         return args.func(args)
     except DGraphError as exc:
+        print(f"dgraph {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_ERROR
+    except OSError as exc:  # an output file that cannot be written, a viewer that cannot start
         print(f"dgraph {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
     except KeyboardInterrupt:

@@ -50,7 +50,8 @@ class Entity:
     * :meth:`prepare_state` / :meth:`commit_state` -- for entities with ``has_state = True``,
       the two phases of the tick transition driven by the device loop;
     * :meth:`observe` -- for entities with ``observes = True`` (recorders), called every tick
-      after the control is computed and before states are committed;
+      after the control is computed and before states are committed; what it reads is kept
+      in :meth:`commit_state`, so a failed tick leaves nothing behind;
     * :meth:`check` -- extra problems reported by :meth:`Graph.validate`.
     """
 
@@ -165,8 +166,7 @@ class Entity:
             out.deps = deps
             for dep in deps:
                 (dep._subs if isinstance(dep, Input) else dep._down).append(out)
-            if out.time_varying:
-                self._clock.time_varying.append(out)
+            self._clock.register(out)
 
     def reset(self) -> None:
         """Set the states to their initial values (override; called at construction)."""
@@ -175,14 +175,14 @@ class Entity:
                 sig.set(sig.initial, 0)
 
     def _attach_clock(self, clock: Clock) -> None:
-        """Share ``clock`` (the graph's) instead of the entity's private one."""
+        """Move to ``clock`` (joining or leaving a graph): a new time base, so every computed
+        output is recomputed on its next read; a periodic hold moves with its output."""
         for sig in self._signals.values():
             if isinstance(sig, Output):
                 sig._clock = clock
-                if sig.time_varying:
-                    clock.time_varying.append(sig)
-                if sig._held:  # a periodic hold moves with its output
-                    clock.held.append(sig)
+                if not isinstance(sig, State):
+                    sig._stale = True
+                clock.register(sig)
         self._clock = clock
 
     # -- tick transition (stateful entities) --------------------------------------------------

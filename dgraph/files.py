@@ -64,6 +64,8 @@ SCHEMA: dict[str, Any] = {
     },
 }
 
+_INT, _FLOAT = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float"
+MAX_NUMBER_CHARS = 64
 _PLAIN_TAGS = {
     "tag:yaml.org,2002:str", "tag:yaml.org,2002:int", "tag:yaml.org,2002:float",
     "tag:yaml.org,2002:bool", "tag:yaml.org,2002:null",
@@ -126,6 +128,10 @@ def _scalar(doc: _Document, node: yaml.Node, path: tuple[Any, ...], loader: yaml
         return GraphFileError(message, file=doc.file, line=node.start_mark.line + 1,
                               key=".".join(map(str, path)) or None)
 
+    if node.tag in (_INT, _FLOAT) and (":" in node.value or len(node.value) > MAX_NUMBER_CHARS):
+        # YAML 1.1 base-60 numbers (1:30) are refused, and so are absurdly long ones: PyYAML
+        # converts both in quadratic time
+        raise error(f"{node.value[:24]}{'...' if len(node.value) > 24 else ''} is not a supported number")
     try:
         value = loader.construct_object(node)
     except (ValueError, KeyError, IndexError, TypeError, OverflowError, yaml.YAMLError):
@@ -188,21 +194,23 @@ def _schema_message(err: jsonschema.ValidationError) -> tuple[str, tuple[Any, ..
     return err.message, path
 
 
+def read_text(path: str | Path) -> str:
+    """The text of a graph file (:class:`GraphFileError` if unreadable or not UTF-8)."""
+    try:
+        return Path(path).read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise GraphFileError(f"cannot read: {exc.strerror or exc}", file=str(path)) from None
+    except UnicodeDecodeError as exc:
+        raise GraphFileError(f"not UTF-8 text: {exc.reason}", file=str(path)) from None
+
+
 def load(path: str | Path, overrides: dict[str, Any] | None = None) -> Graph:
     """Build the graph described by the file at ``path``.
 
     ``overrides`` maps ``entity.name`` to a value: a parameter (applied before the entity is
     built) or an input constant (set after the plugs), as ``dgraph run --set`` does.
     """
-    file = str(path)
-    try:
-        raw = Path(path).read_bytes()
-        text = raw.decode("utf-8")
-    except OSError as exc:
-        raise GraphFileError(f"cannot read: {exc.strerror or exc}", file=file) from None
-    except UnicodeDecodeError as exc:
-        raise GraphFileError(f"not UTF-8 text: {exc.reason}", file=file) from None
-    return loads(text, file, overrides)
+    return loads(read_text(path), str(path), overrides)
 
 
 def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = None) -> Graph:
@@ -219,8 +227,14 @@ def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = 
 
 
 def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> Graph:
-    graph = Graph(dt=data.get("dt", 0.001), name=data.get("name", Path(doc.file).stem or "graph"))
-    graph.duration = data.get("duration")
+    try:
+        graph = Graph(dt=data.get("dt", 0.001), name=data.get("name", Path(doc.file).stem or "graph"))
+    except DGraphError as exc:
+        raise doc.error(str(exc), ("dt",), exc) from None
+    duration = data.get("duration")
+    if duration is not None and not math.isfinite(duration):
+        raise doc.error(f"duration must be finite, got {duration!r}", ("duration",))
+    graph.duration = duration
     entities = declared_entities(data)
     if "record" in data and RECORDER_NAME in data["entities"]:
         raise doc.error(f"'record' creates an entity named {RECORDER_NAME!r}, which already exists", ("record",))
@@ -235,14 +249,23 @@ def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> G
         except DGraphError as exc:
             raise doc.error(str(exc), ("plugs", i), exc) from None
     for key, value in data.get("set", {}).items():
-        _set_constant(graph, doc, key, value, ("set", key))
+        refused = _set_constant(graph, key, value)
+        if refused:
+            raise doc.error(str(refused), ("set", key), refused)
     for key, value in constants.items():
-        _set_constant(graph, doc, key, value, ())
+        refused = _set_constant(graph, key, value)
+        if refused:
+            raise _override_error(str(refused), key)
     for entity in graph:
         problems = entity.check()
         if problems:
             raise doc.error("; ".join(problems), entities[entity.name].get("_path", ("entities", entity.name)))
     return graph
+
+
+def _override_error(message: str, key: str) -> GraphFileError:
+    """An error in a ``--set entity.name=value`` given on the command line (not in the file)."""
+    return GraphFileError(message, file="<command line>", key=f"--set {key}", entity=key.partition(".")[0])
 
 
 def declared_entities(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
@@ -262,7 +285,7 @@ def _split_overrides(doc: _Document, entities: dict[str, Any], overrides: dict[s
     for key, value in overrides.items():
         entity, _, name = key.partition(".")
         if entity not in entities or not name:
-            raise doc.error(f"override {key!r}: no entity {entity!r} in the graph", ())
+            raise _override_error(f"no entity {entity!r} in {doc.file}", key)
         try:
             is_param = name in get_type(entities[entity]["type"])._param_decls
         except DGraphError as exc:
@@ -290,17 +313,17 @@ def _make_entity(doc: _Document, name: str, type_name: str, params: dict[str, An
                         (*where, "params") if path is None else where) from None
 
 
-def _set_constant(graph: Graph, doc: _Document, key: str, value: Any, path: tuple[Any, ...]) -> None:
+def _set_constant(graph: Graph, key: str, value: Any) -> DGraphError | None:
+    """Set input ``key`` to ``value``; the refusal, if any (the caller locates it)."""
     try:
         sig = graph.signal(key)
-    except DGraphError as exc:
-        raise doc.error(str(exc), path, exc) from None
-    if not isinstance(sig, Input):
-        raise doc.error(f"{key} is an output: only inputs (and parameters, with --set) can be set", path)
-    try:
+        if not isinstance(sig, Input):
+            return GraphError(f"{key} is an output: only inputs (and parameters, with --set) can be set",
+                              entity=sig.entity.name, signal=sig.name)
         sig.set(value)
     except DGraphError as exc:
-        raise doc.error(str(exc), path, exc) from None
+        return exc
+    return None
 
 
 def to_plain(value: Any, where: str) -> Any:

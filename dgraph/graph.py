@@ -79,8 +79,7 @@ class Graph:
                 for inp in sig.plugged_inputs:
                     inp.unplug()
         set_checking(self._computed_outputs([entity]), False)
-        self.clock.time_varying = [o for o in self.clock.time_varying if o not in mine]
-        self.clock.held = [o for o in self.clock.held if o not in mine]
+        self.clock.forget([s for s in mine if isinstance(s, Output)])
         for sig in mine:
             if isinstance(sig, Output) and sig._held:
                 sig.release_hold()  # its readers must not keep a held value forever
@@ -273,6 +272,7 @@ class Graph:
                 "devices": [e for e in ents if isinstance(e, Device)],
                 "stateful": [e for e in ents if e.has_state],
                 "observers": [e for e in ents if e.observes],
+                "commit": [e for e in ents if e.has_state] + [e for e in ents if e.observes and not e.has_state],
                 "periodic": [o for o in self._computed_outputs() if o.period > 1],
             }
         return self._roles

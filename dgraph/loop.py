@@ -8,7 +8,8 @@ One tick at ``t``:
 3. every stateful entity prepares (stages) its next state from the values at ``t`` (devices
    pull their control here, so this is where the graph is evaluated);
 4. observers (recorders) read what they record, at ``t``;
-5. every stateful entity commits its staged state, stamped ``t + 1`` (this cannot fail);
+5. every stateful entity commits its staged state, stamped ``t + 1`` (this cannot fail), and
+   observers keep the row they read;
 6. ``after`` hooks of every device, at ``t + 1``.
 
 Nothing is committed if steps 1-4 fail, so a failing hook or computation leaves every state
@@ -17,7 +18,11 @@ at ``t``, consistent, and the loop can be resumed.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import math
+import signal
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
 from dgraph.errors import GraphError
@@ -28,7 +33,8 @@ if TYPE_CHECKING:
     from dgraph.graph import Graph
 
 Roles = dict[str, list[Any]]
-"""``devices``, ``stateful`` and ``observers`` entities and ``periodic`` outputs of a graph."""
+"""``devices``, ``stateful``, ``observers`` and ``commit`` (stateful, then observers) entities,
+and ``periodic`` outputs of a graph."""
 
 PROGRESS_MIN_TICKS = 5000
 """Runs at least this long show a progress bar by default."""
@@ -54,7 +60,7 @@ def transition(roles: Roles, t: int, call: Callable[[Entity, str, int], None] = 
         call(entity, "prepare_state", t)
     for entity in observers:
         call(entity, "observe", t)
-    for entity in stateful:
+    for entity in roles["commit"]:
         call(entity, "commit_state", t + 1)
 
 
@@ -82,25 +88,50 @@ def run(graph: Graph, ticks: int | None = None, duration: float | None = None,
     if (ticks is None) == (duration is None):
         raise GraphError("run needs exactly one of ticks= or duration=")
     if duration is not None:
-        if not duration >= 0:
-            raise GraphError(f"duration must be >= 0 s, got {duration!r}")
+        if not (duration >= 0 and math.isfinite(duration / graph.dt)):
+            raise GraphError(f"duration must be a finite number of seconds >= 0, got {duration!r}")
         ticks = round(duration / graph.dt)
     if not isinstance(ticks, int) or ticks < 0:
         raise GraphError(f"ticks must be an int >= 0, got {ticks!r}")
     if not graph.roles()["stateful"]:
         raise GraphError(f"graph {graph.name!r} has no device or stateful entity to step")
     show = ticks >= PROGRESS_MIN_TICKS if progress is None else progress
-    if not show:
-        for _ in range(ticks):
-            step(graph)
-        return
-    from tqdm import tqdm
-    with tqdm(total=ticks, unit="tick", desc=graph.name, mininterval=0.5, leave=False) as bar:
-        done = 0
-        chunk = max(1, ticks // 200)
-        while done < ticks:
-            n = min(chunk, ticks - done)
-            for _ in range(n):
+    with interrupts_between_ticks() as interrupted:
+        if not show:
+            for _ in range(ticks):
                 step(graph)
-            done += n
-            bar.update(n)
+                if interrupted():
+                    raise KeyboardInterrupt(f"interrupted at tick {graph.t}")
+            return
+        from tqdm import tqdm
+        with tqdm(total=ticks, unit="tick", desc=graph.name, mininterval=0.5, leave=False) as bar:
+            for done in range(1, ticks + 1):
+                step(graph)
+                if interrupted():
+                    raise KeyboardInterrupt(f"interrupted at tick {graph.t}")
+                if done % 100 == 0 or done == ticks:
+                    bar.update(done - bar.n)
+
+
+@contextmanager
+def interrupts_between_ticks() -> Iterator[Callable[[], bool]]:
+    """Let Ctrl-C stop a run between two ticks, never in the middle of a commit.
+
+    The first SIGINT is noted and the run stops after the current tick; a second one
+    interrupts at once (for a tick that hangs). Only in the main thread; elsewhere a no-op.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield lambda: False
+        return
+    hits: list[int] = []
+
+    def note(signum: int, frame: Any) -> None:
+        if hits:
+            raise KeyboardInterrupt
+        hits.append(signum)
+
+    previous = signal.signal(signal.SIGINT, note)
+    try:
+        yield lambda: bool(hits)
+    finally:
+        signal.signal(signal.SIGINT, previous)

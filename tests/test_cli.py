@@ -117,3 +117,25 @@ def test_a_run_that_fails_keeps_what_was_recorded(tmp_path, capsys):
     data = np.load(tmp_path / "f.npz")
     assert len(data["tick"]) == 250 and data["tick"][-1] == 249
     assert (tmp_path / "f.rrd").stat().st_size > 0
+
+
+def test_command_line_mistakes_are_one_line_errors(tmp_path, capsys):
+    assert main(["run", "missing.yaml", "--ticks", "1"]) == 2
+    assert "missing.yaml: cannot read" in capsys.readouterr().err
+    assert main(["run", PD, "--duration", "inf", "--rerun", "off"]) == 2
+    assert "finite number of seconds" in capsys.readouterr().err
+    assert main(["run", PD, "--ticks", "5", "--npz", "/proc/none/x.npz", "--rerun", "off"]) == 2
+    assert "cannot write /proc/none/x.npz" in capsys.readouterr().err
+    assert main(["run", PD, "--set", "kp.gain=abc"]) == 2
+    assert "<command line> [--set kp.gain]" in capsys.readouterr().err
+
+
+def test_rerun_option_before_the_file_and_file_settings_kept(tmp_path):
+    assert main(["run", "--rerun", "off", PD, "--ticks", "5", "--npz", "plain"]) == 0
+    assert (tmp_path / "plain.npz").exists() and not (tmp_path / "out").exists()
+    own = tmp_path / "own.yaml"
+    text = Path(PD).read_text().replace("record: [robot.q, robot.v, command.output, error.output]\n", "")
+    own.write_text(text.replace("entities:\n", "entities:\n  rec: {type: Recorder, params: "
+                                "{signals: [robot.q], rrd_path: mine/rec.rrd}}\n"))
+    assert main(["run", str(own), "--ticks", "5"]) == 0  # no --rerun: the file's own path is used
+    assert (tmp_path / "mine" / "rec.rrd").exists() and not (tmp_path / "out").exists()

@@ -123,3 +123,27 @@ def test_long_run_shows_progress(graph, capsys):
     assert "tick" in capsys.readouterr().err
     graph.run(ticks=300)  # short: no bar by default
     assert capsys.readouterr().err == ""
+
+
+def test_ctrl_c_stops_between_ticks_with_every_state_committed(graph):
+    import os
+    import random
+    import signal
+    import threading
+
+    from dgraph.entities.discrete import Delay
+
+    graph.add(Ticker("dev"))
+    delays = [graph.add(Delay(f"d{i}")) for i in range(100)]
+    for d in delays:
+        d.input.set(1.0)
+    rng = random.Random(0)
+    for _ in range(15):
+        timer = threading.Timer(rng.uniform(0.001, 0.02), os.kill, (os.getpid(), signal.SIGINT))
+        timer.start()
+        with pytest.raises(KeyboardInterrupt, match="interrupted at tick"):
+            graph.run(ticks=10**7, progress=False)
+        timer.join()
+        stamps = {graph["dev.x"].time} | {d.output.time for d in delays}
+        assert stamps == {graph.t}
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -25,11 +25,12 @@ class Clock:
         inner: profiling accumulator of the time spent in nested computations.
     """
 
-    __slots__ = ("cache_enabled", "check_values", "held", "inner", "profiling", "t", "time_varying")
+    __slots__ = ("cache_enabled", "check_values", "held", "inner", "periodic", "profiling", "t", "time_varying")
 
     def __init__(self) -> None:
         self.t: int | None = None
         self.time_varying: list[Output] = []
+        self.periodic: list[Output] = []
         self.held: list[Output] = []
         self.cache_enabled = True
         self.check_values = True
@@ -37,8 +38,9 @@ class Clock:
         self.inner = 0.0
 
     def advance(self, t: int) -> None:
-        """Move to tick ``t``: invalidate time-varying outputs and release the holds of periodic
-        outputs whose period window has ended."""
+        """Move to tick ``t``: invalidate time-varying outputs, release the holds of periodic
+        outputs whose window has ended, then stamp ``t`` on periodic outputs still valid at the
+        start of a window (that is the window's sample)."""
         self.t = t
         for output in self.time_varying:
             output.invalidate()
@@ -50,3 +52,22 @@ class Clock:
                 else:
                     still_held.append(output)
             self.held = still_held
+        for output in self.periodic:  # a value still valid at a window start is that window's sample
+            if t % output.period == 0 and not output._stale and output._time is not None and output._time < t:
+                output._time = t
+
+    def register(self, output: Output) -> None:
+        """Follow ``output`` if it is time-varying, periodic or holding a value."""
+        if output.time_varying:
+            self.time_varying.append(output)
+        if output.period > 1:
+            self.periodic.append(output)
+        if output._held:
+            self.held.append(output)
+
+    def forget(self, outputs: list[Output]) -> None:
+        """Stop following ``outputs`` (their entity leaves the graph)."""
+        gone = {id(o) for o in outputs}
+        self.time_varying = [o for o in self.time_varying if id(o) not in gone]
+        self.periodic = [o for o in self.periodic if id(o) not in gone]
+        self.held = [o for o in self.held if id(o) not in gone]

@@ -155,6 +155,9 @@ class Output(Signal):
     def _recompute(self, t: int) -> Any:
         if self.period > 1 and self._time is not None and t - t % self.period <= self._time <= t:
             return self._hold()  # already sampled in this period window
+        return self._compute(t)
+
+    def _compute(self, t: int) -> Any:
         if self._computing:
             raise ComputeError(f"{self.full_name} was read during its own computation at tick {t} "
                                "(an undeclared algebraic loop)", entity=self.entity.name, signal=self.name)
@@ -208,12 +211,23 @@ class Output(Signal):
     def sample(self, t: int) -> None:
         """Loop-driven sampling of a periodic output at the start of a window (``t % period == 0``).
 
-        Computes if stale; if the cached value is still valid it is stamped ``t``, so that the
-        window's sample does not depend on who reads when, or on the cache being on.
+        The loop's sample is authoritative: a stale output recomputes now, even if something
+        computed it earlier in this tick (a hook, a failed tick being retried) and a later
+        change was held; readers of the held value are invalidated. A value still valid is
+        stamped ``t`` by the clock. So the window's value never depends on who read it first.
         """
-        self(t)
-        if not self._stale and self._time is not None and self._time < t:
-            self._time = t
+        clock = self._clock
+        if t != clock.t:
+            clock.advance(t)
+        if not self._stale:
+            return
+        held = self._held
+        if held:
+            self._held = False
+            clock.held = [o for o in clock.held if o is not self]
+        self._compute(t)
+        if held:
+            _invalidate_all(self._down)
 
     # -- staleness --------------------------------------------------------------------------
     def invalidate(self) -> None:

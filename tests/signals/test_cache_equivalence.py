@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 from conftest import Periodic, Ticker
 from hypothesis import HealthCheck, given, settings
@@ -12,6 +14,8 @@ from dgraph.entities.discrete import Delay, Integrator
 from dgraph.entities.operators import Add, Gain, Saturation, Switch
 from dgraph.entities.references import Sinusoid
 
+EXAMPLES = int(os.environ.get("DGRAPH_HYPOTHESIS_EXAMPLES", "60"))
+"""Random graphs per run; raise it for a long soak (e.g. 2000)."""
 KINDS = ("add", "gain", "saturation", "switch", "delay", "integrator", "periodic")
 
 
@@ -76,7 +80,7 @@ node = st.tuples(st.sampled_from(KINDS), st.tuples(st.integers(0, 50), st.intege
                  st.floats(-2.0, 2.0, allow_nan=False))
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(plan=st.lists(node, min_size=1, max_size=14),
        reads=st.lists(st.lists(st.integers(0, 60), max_size=5), min_size=1, max_size=25),
        seed=st.integers(0, 5),

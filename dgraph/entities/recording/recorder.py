@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
+from dgraph.entities.recording.columns import Column
 from dgraph.entities.recording.rerun_stream import RerunStream
 from dgraph.signals.signal import Signal
 
@@ -34,8 +35,9 @@ class Recorder(dg.Entity):
 
     At each tick, after the control is computed and before the states are committed, the
     recorder reads each signal at ``t`` (a cached read, since the device has just pulled the
-    graph; a signal nobody else needs is computed as it would be on demand). Values go to
-    in-memory numpy columns, saved as ``.npz`` on :meth:`close` (keys ``tick``, ``time`` and
+    graph; a signal nobody else needs is computed as it would be on demand); the row is kept
+    only if the tick commits. Values go to in-memory numpy columns (about 8 bytes per number
+    per tick), saved as ``.npz`` on :meth:`close` (keys ``tick``, ``time`` and
     ``entity.signal``), and to Rerun as time series on the ``tick`` and ``time`` timelines,
     one series per component, entity path ``signals/<entity>/<signal>``.
 
@@ -61,11 +63,14 @@ class Recorder(dg.Entity):
         if self.decimation < 1 or self.flush_every < 1:
             raise dg.ParamError(f"{self.name}: decimation and flush_every must be >= 1", entity=self.name)
         self._sources: list[Signal] | None = None
-        self.ticks: list[int] = []
-        self._columns: dict[str, list[Any]] = {name: [] for name in self.signals}
+        self._ticks = Column()
+        self._columns = {name: Column() for name in self.signals}
+        self._staged: tuple[int, list[Any]] | None = None
         self._stream: RerunStream | None = None
         self._pending = 0
         self.closed = False
+        if self.npz_path and not self.npz_path.endswith(".npz"):
+            self.npz_path += ".npz"  # what numpy would write anyway; reported as written
 
     def check(self) -> list[str]:
         """Every recorded name must be a signal of the graph."""
@@ -93,12 +98,19 @@ class Recorder(dg.Entity):
         return self._sources
 
     def observe(self, t: int) -> None:
-        """Read every recorded signal at ``t`` and store the values."""
+        """Read every recorded signal at ``t``; the row is kept when the tick commits."""
         sources = self._sources if self._sources is not None else self._open()
-        values = [sig(t) for sig in sources]  # all or nothing: the columns stay aligned with ticks
-        self.ticks.append(t)
+        self._staged = (t, [sig(t) for sig in sources])
+
+    def commit_state(self, t_next: int) -> None:
+        """The tick committed: append its row (a failed tick leaves no row)."""
+        if self._staged is None:
+            return
+        t, values = self._staged
+        self._staged = None
+        self._ticks.append(t)
         for name, value in zip(self.signals, values, strict=True):
-            self._columns[name].append(value.copy() if isinstance(value, np.ndarray) else value)
+            self._columns[name].append(value)
         if self._stream is not None:
             self._pending += 1
             if self._pending >= self.flush_every:
@@ -109,22 +121,28 @@ class Recorder(dg.Entity):
         self._pending = 0
         if n == 0 or self._stream is None:
             return
-        ticks = np.asarray(self.ticks[-n:])
+        ticks = self._ticks.last(n)
         keep = ticks % self.decimation == 0
         if not keep.any():
             return
-        for name, sig in zip(self.signals, self._sources or [], strict=False):
-            values = np.asarray(self._columns[name][-n:], dtype=float)[keep]
-            shape = values.shape[1:]
-            self._stream.send(f"signals/{name.replace('.', '/')}", component_names(sig, shape),
-                              ticks[keep], values.reshape(len(values), -1))
+        for name, sig in zip(self.signals, self._sources or [], strict=True):
+            values = self._columns[name].last(n)[keep]
+            if values.dtype.kind not in "fiub":
+                continue  # not numbers: kept in the .npz, not plotted
+            self._stream.send(f"signals/{name.replace('.', '/')}", component_names(sig, values.shape[1:]),
+                              ticks[keep], values.reshape(len(values), -1).astype(float))
+
+    @property
+    def ticks(self) -> np.ndarray:
+        """The recorded ticks."""
+        return self._ticks.values().astype(np.int64)
 
     def data(self) -> dict[str, np.ndarray]:
         """The recording so far: ``tick``, ``time`` (s) and one array per signal (ticks first)."""
-        out = {"tick": np.asarray(self.ticks, dtype=np.int64)}
+        out = {"tick": self.ticks}
         out["time"] = out["tick"] * (self.graph.dt if self.graph is not None else 1.0)
-        for name, values in self._columns.items():
-            out[name] = np.asarray(values) if values else np.zeros((0,))
+        for name, column in self._columns.items():
+            out[name] = column.values().copy()
         return out
 
     def close(self) -> None:
@@ -136,5 +154,9 @@ class Recorder(dg.Entity):
             self._send()
             self._stream.close()
         if self.npz_path:
-            Path(self.npz_path).parent.mkdir(parents=True, exist_ok=True)
-            np.savez(self.npz_path, **self.data())
+            try:
+                Path(self.npz_path).parent.mkdir(parents=True, exist_ok=True)
+                np.savez(self.npz_path, **self.data())
+            except OSError as exc:
+                raise dg.GraphError(f"{self.name}: cannot write {self.npz_path}: {exc.strerror or exc}",
+                                    entity=self.name) from None

@@ -13,6 +13,8 @@ from typing import Any
 
 import numpy as np
 
+from dgraph.errors import GraphError
+
 
 class RerunStream:
     """One Rerun recording with a ``tick`` sequence timeline and a ``time`` duration timeline."""
@@ -25,8 +27,11 @@ class RerunStream:
         self.url: str | None = None
         self.rec = rr.RecordingStream(application_id)
         if mode == "save":
-            Path(str(rrd_path)).parent.mkdir(parents=True, exist_ok=True)
-            self.rec.save(str(rrd_path))
+            try:
+                Path(str(rrd_path)).parent.mkdir(parents=True, exist_ok=True)
+                self.rec.save(str(rrd_path))
+            except (OSError, RuntimeError) as exc:
+                raise GraphError(f"cannot write the Rerun recording {rrd_path}: {exc}") from None
         elif mode == "spawn":
             self.rec.spawn()
         elif mode == "serve":
