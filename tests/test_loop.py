@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from conftest import Scale, Ticker
 
@@ -147,3 +148,65 @@ def test_ctrl_c_stops_between_ticks_with_every_state_committed(graph):
         stamps = {graph["dev.x"].time} | {d.output.time for d in delays}
         assert stamps == {graph.t}
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered:RuntimeWarning")  # the NaN is the point
+def test_a_failed_tick_with_a_periodic_output_can_be_fixed_and_resumed(graph):
+    from dgraph.entities.devices import KinematicDevice
+    from dgraph.entities.operators import Gain
+
+    class Planner(dg.Entity):
+        u = dg.Input(shape=(1,), default=[0.0])
+
+        @dg.output(shape=(1,), depends=("u",), period=4)
+        def p(self, t):
+            return self.u(t) * 1.0
+
+    planner = graph.add(Planner("planner"))
+    k = graph.add(Gain("k", size=1))
+    graph.add(KinematicDevice("robot", size=1))
+    graph.plug("planner.p", "k.input")
+    graph.plug("k.output", "robot.control")
+    k.gain.set(0.0)
+    graph.run(ticks=4)
+    planner.u.set([float("inf")])  # 0 * inf = NaN downstream: the tick fails
+    with pytest.raises(dg.SpecError, match=r"k\.output at tick 4"):
+        graph.step()
+    planner.u.set([1.0])
+    graph.run(ticks=3)  # the window's sample is taken again with the fixed input
+    assert graph.t == 7 and planner.p.value.tolist() == [1.0]
+
+
+def test_recorders_keep_no_row_of_a_failed_tick(graph):
+    from dgraph.entities.discrete import Delay
+    from dgraph.entities.operators import Switch
+    from dgraph.entities.recording import Recorder
+
+    d = graph.add(Delay("d"))
+    d.input.set(1.0)
+    sw = graph.add(Switch("sw"))
+    sw.in0.set(0.0)
+    sw.in1.set(1.0)
+    a = graph.add(Recorder("a", signals=["d.output"], rerun="off"))
+    b = graph.add(Recorder("b", signals=["sw.output"], rerun="off"))
+    graph.run(ticks=2)
+    sw.selection.set(5)  # b fails after a has read its row
+    with pytest.raises(dg.ComputeError):
+        graph.step()
+    sw.selection.set(1)
+    graph.run(ticks=2)
+    assert a.data()["tick"].tolist() == b.data()["tick"].tolist() == [0, 1, 2, 3]
+
+
+def test_an_entity_joining_a_graph_recomputes_on_the_graph_time():
+    from dgraph.entities.references import Sinusoid
+
+    g = dg.Graph(dt=0.05)
+    g.add(Ticker("dev"))
+    g["dev"].after.add(g["dev.x"])  # keeps the graph clock at graph.t between ticks
+    g.run(ticks=5)
+    ref = Sinusoid("ref", amplitude=1.0, frequency=0.7, dt=0.05)
+    before = ref.output(5)  # read on its own clock
+    g.step()
+    g.add(ref)
+    assert ref.output(g.t) == pytest.approx(np.sin(2 * np.pi * 0.7 * 6 * 0.05)) != before
