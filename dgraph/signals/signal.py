@@ -86,8 +86,9 @@ class Output(Signal):
     """A computed output: ``out(t)`` returns the value at tick ``t``, recomputing lazily.
 
     Recomputes when read at ``t`` only if it was never computed or something it depends on
-    changed since; never more than once per tick. With ``period=N`` it recomputes at most every
-    N ticks. Counters: ``count`` (computations), ``total_duration`` (seconds, when profiling).
+    changed since; never more than once per tick. With ``period=N`` it recomputes at most once
+    per window ``[kN, (k+1)N)``, sampled by the device loop at the window start. Counters:
+    ``count`` (computations), ``total_duration`` (seconds, exclusive, when profiling).
     """
 
     __slots__ = (
