@@ -153,12 +153,11 @@ class Output(Signal):
             return self._recompute(t)
         return self._value
 
-    def _recompute(self, t: int) -> Any:
-        if self.period > 1 and self._time is not None and t - t % self.period <= self._time <= t:
-            return self._hold()  # already sampled in this period window
-        return self._compute(t)
-
-    def _compute(self, t: int) -> Any:
+    def _recompute(self, t: int, force: bool = False) -> Any:
+        """Compute the value at ``t`` (a periodic output already sampled in this window holds,
+        unless ``force``)."""
+        if self.period > 1 and not force and self._time is not None and t - t % self.period <= self._time <= t:
+            return self._hold()
         if self._computing:
             raise ComputeError(f"{self.full_name} was read during its own computation at tick {t} "
                                "(an undeclared algebraic loop)", entity=self.entity.name, signal=self.name)
@@ -226,7 +225,7 @@ class Output(Signal):
         if held:
             self._held = False
             clock.held = [o for o in clock.held if o is not self]
-        self._compute(t)
+        self._recompute(t, force=True)
         if held:
             _invalidate_all(self._down)
 
