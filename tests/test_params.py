@@ -1,0 +1,65 @@
+"""Typed parameters: kinds, bounds, choices, optional values."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import dgraph as dg
+from dgraph.params import Param
+
+
+def make(name: str, **kw) -> Param:
+    p = Param(**kw)
+    p.name = name
+    return p
+
+
+@pytest.mark.parametrize(("kind", "good", "converted", "bad"), [
+    ("float", 2, 2.0, "2"),
+    ("int", np.int64(3), 3, 3.5),
+    ("bool", True, True, 1),
+    ("str", "a", "a", 1),
+    ("vector", [1, 2], [1.0, 2.0], "12"),
+    ("str_list", ("a", "b"), ["a", "b"], "ab"),
+    ("int_list", [1, 2], [1, 2], [1.5]),
+])
+def test_kinds_convert_or_refuse(kind, good, converted, bad):
+    p = make("x", kind=kind)
+    assert np.array_equal(p.convert(good, "e"), converted)
+    with pytest.raises(dg.ParamError, match=r"e: parameter 'x'"):
+        p.convert(bad, "e")
+
+
+def test_bool_is_not_a_number():
+    with pytest.raises(dg.ParamError):
+        make("x", kind="int").convert(True, "e")
+    with pytest.raises(dg.ParamError):
+        make("x", kind="float").convert(False, "e")
+
+
+def test_vector_refuses_nan_and_high_rank():
+    with pytest.raises(dg.ParamError, match="NaN"):
+        make("x", kind="vector").convert([1.0, float("nan")], "e")
+    with pytest.raises(dg.ParamError, match="dimensions"):
+        make("x", kind="vector").convert(np.zeros((2, 2, 2)), "e")
+
+
+def test_bounds_choices_optional():
+    p = make("n", kind="int", minimum=1, maximum=4)
+    assert p.convert(4, "e") == 4
+    with pytest.raises(dg.ParamError, match=r"within \[1, 4\]"):
+        p.convert(5, "e")
+    c = make("mode", kind="str", choices=("a", "b"))
+    with pytest.raises(dg.ParamError, match="must be one of"):
+        c.convert("c", "e")
+    assert make("o", kind="int", default=None).convert(None, "e") is None
+    with pytest.raises(dg.ParamError):
+        make("r", kind="int").convert(None, "e")
+
+
+def test_unknown_kind_and_describe():
+    with pytest.raises(dg.ParamError, match="unknown parameter kind"):
+        Param(kind="complex")
+    assert make("size", kind="int", default=3, doc="the size").describe() == "size: int = 3  -- the size"
+    assert make("value", kind="vector").describe() == "value: vector = required"
