@@ -413,9 +413,13 @@ class Input(Signal):
         """Forget a constant set with :meth:`set` and fall back to the default (if any)."""
         if self.is_set:
             self.is_set = False
-            self._has_value = self.has_default
-            self._value = self.default if self.has_default else None
+            self._fall_back()
             _invalidate_all(self._subs)
+
+    def _fall_back(self) -> None:
+        """Hold the default, if one was declared, else nothing."""
+        self._has_value = self.has_default
+        self._value = self.default if self.has_default else None
 
     # -- plugging ---------------------------------------------------------------------------
     def plug(self, source: Output) -> None:
@@ -447,8 +451,7 @@ class Input(Signal):
             source._down.remove(sub)
         self._source = None
         if not self.is_set:
-            self._has_value = self.has_default
-            self._value = self.default if self.has_default else None
+            self._fall_back()
         _invalidate_all(self._subs)
 
     @property

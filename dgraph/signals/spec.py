@@ -140,12 +140,6 @@ class Spec:
             return f"computed {_short(value)}, declared {self!r}"
         return None
 
-    def check(self, value: Any, where: str) -> None:
-        """Raise :class:`SpecError` naming ``where`` if :meth:`problem` finds one."""
-        problem = self.problem(value)
-        if problem is not None:
-            raise SpecError(f"{where}: {problem}")
-
 
 _NUMPY = {"float": np.float64, "int": np.int64, "bool": np.bool_}
 _KIND = {"float": "f", "int": "i", "bool": "b"}

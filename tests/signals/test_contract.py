@@ -368,3 +368,15 @@ def test_a_bad_next_state_fails_before_anything_is_committed(graph):
         graph.step()
     assert (info.value.entity, info.value.signal) == ("i", "output")
     assert graph.t == 1 and d.output.time == 1 and d.output.value == 1.0 and i.output.time == 1
+
+
+def test_reset_forgets_a_constant_and_recomputes(graph):
+    s = graph.add(Sum2("s"))
+    s.a.set(1.0)
+    s.b.set(5.0)
+    assert s.s(0) == 6.0
+    s.b.reset()
+    assert not s.b.is_set and s.b.value == 0.0 and s.s(0) == 1.0 and s.s.count == 2
+    s.a.reset()
+    with pytest.raises(dg.UnpluggedInputError, match=r"s\.a"):
+        s.s(0)

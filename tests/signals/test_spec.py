@@ -57,15 +57,16 @@ def test_plug_compatibility():
     assert Spec((3,), "object").accepts(Spec((3,), "float"))
 
 
-def test_check_of_computed_values():
-    Spec((2,)).check(np.zeros(2), "y")
-    with pytest.raises(SpecError, match="computed shape"):
-        Spec((2,)).check(np.zeros(3), "y")
-    with pytest.raises(SpecError, match="computed a scalar"):
-        Spec((2,)).check(1.0, "y")
-    with pytest.raises(SpecError, match="NaN"):
-        Spec(()).check(float("nan"), "y")
-    Spec((), "object").check(object(), "y")
+def test_problems_of_computed_values():
+    assert Spec((2,)).problem(np.zeros(2)) is None
+    assert "computed shape (3,)" in Spec((2,)).problem(np.zeros(3))
+    assert "computed a scalar" in Spec((2,)).problem(1.0)
+    assert Spec(()).problem(float("nan")) == "computed NaN"
+    assert "NaN" in Spec((2,)).problem(np.array([0.0, np.nan]))
+    assert "return a numpy array" in Spec((2,)).problem([1.0, 2.0])
+    assert "declared int()" in Spec((), "int").problem(1.5)
+    assert "int64" in Spec((2,), "bool").problem(np.zeros(2, dtype=int))
+    assert Spec((), "object").problem(object()) is None
 
 
 def test_resolve_shape_from_owner_attributes():

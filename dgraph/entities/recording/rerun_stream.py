@@ -9,7 +9,6 @@ tick instead of ~37 µs per ``log`` call.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -50,12 +49,6 @@ class RerunStream:
             indexes=[rr.TimeColumn("tick", sequence=ticks), rr.TimeColumn("time", duration=ticks * self.dt)],
             columns=rr.Scalars.columns(scalars=values),
         )
-
-    def log(self, path: str, archetype: Any, tick: int) -> None:
-        """Log one archetype (e.g. a 3D transform) at ``tick``."""
-        self.rec.set_time("tick", sequence=tick)
-        self.rec.set_time("time", duration=tick * self.dt)
-        self.rec.log(path, archetype)
 
     def close(self) -> None:
         """Flush and close the sink."""
