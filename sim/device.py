@@ -1,0 +1,1 @@
+"""The MuJoCo device entity."""
