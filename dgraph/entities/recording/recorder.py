@@ -10,7 +10,7 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.recording.columns import Column
-from dgraph.entities.recording.rerun_stream import RerunStream
+from dgraph.entities.recording.rerun_stream import RerunStream, open_stream
 from dgraph.signals.signal import Signal
 
 
@@ -44,7 +44,8 @@ class Recorder(dg.Entity):
     Parameters: ``signals`` (``entity.signal`` names), ``rerun`` (``save``, the default: an .rrd
     file, ``rrd_path`` or ``out/<graph name>.rrd``; ``spawn``: a viewer; ``serve``: a web viewer
     on loopback; ``off``), ``npz_path``, ``decimation`` (log one tick in N to Rerun),
-    ``flush_every`` (ticks buffered before sending to Rerun).
+    ``flush_every`` (ticks buffered before sending to Rerun). The Rerun sink is shared with the
+    other entities of the graph that open the same one (a ``RobotView``): one recording.
     """
 
     observes = True
@@ -94,7 +95,7 @@ class Recorder(dg.Entity):
         if self.rerun == "save" and not self.rrd_path:
             self.rrd_path = f"out/{safe_file_stem(self.graph.name)}.rrd"
         if self.rerun != "off":
-            self._stream = RerunStream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt)
+            self._stream = open_stream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt)
         return self._sources
 
     def observe(self, t: int) -> None:

@@ -4,11 +4,17 @@ Rerun is imported only when a stream is opened. Sinks: ``save`` (an .rrd file, t
 when headless), ``spawn`` (a local viewer process) and ``serve`` (gRPC plus a web viewer on
 loopback). Series are sent with ``send_columns`` in blocks, so logging costs a few µs per
 tick instead of ~37 µs per ``log`` call.
+
+A sink is opened once: :func:`open_stream` returns the stream already open for the same sink
+(the same .rrd file, or the same viewer/server for a graph name) and counts its users, so the
+entities of a graph that log to Rerun (the :class:`Recorder`, a :class:`RobotView`) write into
+one recording; the last user's :meth:`RerunStream.close` flushes and closes the sink.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -37,6 +43,13 @@ class RerunStream:
             self.url = self.rec.serve_grpc()
             rr.serve_web_viewer(open_browser=False, connect_to=self.url)
         self._declared: set[str] = set()
+        self.users = 1
+        self._key: tuple[str, str] | None = None
+
+    def indexes(self, ticks: np.ndarray) -> list[Any]:
+        """The ``tick`` and ``time`` time columns of ``ticks``."""
+        rr = self._rr
+        return [rr.TimeColumn("tick", sequence=ticks), rr.TimeColumn("time", duration=ticks * self.dt)]
 
     def send(self, path: str, names: list[str], ticks: np.ndarray, values: np.ndarray) -> None:
         """Send ``values`` (rows = ticks, columns = components) as series named ``names``."""
@@ -44,16 +57,41 @@ class RerunStream:
         if path not in self._declared:
             self.rec.log(path, rr.SeriesLines(names=names), static=True)
             self._declared.add(path)
-        self.rec.send_columns(
-            path,
-            indexes=[rr.TimeColumn("tick", sequence=ticks), rr.TimeColumn("time", duration=ticks * self.dt)],
-            columns=rr.Scalars.columns(scalars=values),
-        )
+        self.rec.send_columns(path, indexes=self.indexes(ticks), columns=rr.Scalars.columns(scalars=values))
 
     def close(self) -> None:
-        """Flush and close the sink."""
+        """Release this user's share; the last user flushes and closes the sink."""
+        self.users -= 1
+        if self.users > 0:
+            return
+        if self._key is not None and _OPEN.get(self._key) is self:
+            del _OPEN[self._key]
         self.rec.flush()
         self.rec.disconnect()
+
+
+_OPEN: dict[tuple[str, str], RerunStream] = {}
+"""Open shared streams by sink: ``("save", absolute .rrd path)``, ``(mode, application id)``."""
+
+
+def open_stream(application_id: str, mode: str, rrd_path: str | None, dt: float) -> RerunStream:
+    """The stream of this sink, shared: opened by the first user, counted for the others.
+
+    Two writers of one .rrd file would corrupt it, so sharing is keyed by the file for
+    ``save``, and by the application (graph) name for ``spawn`` and ``serve``. Every caller
+    must :meth:`~RerunStream.close` it once. Users must agree on ``dt`` (``GraphError``).
+    """
+    key = (mode, str(Path(str(rrd_path)).resolve())) if mode == "save" else (mode, application_id)
+    stream = _OPEN.get(key)
+    if stream is None:
+        stream = RerunStream(application_id, mode, rrd_path, dt)
+        stream._key = key
+        _OPEN[key] = stream
+        return stream
+    if stream.dt != dt:
+        raise GraphError(f"the Rerun sink {key[1]} is already open with dt={stream.dt}, not {dt}")
+    stream.users += 1
+    return stream
 
 
 def read_series(rrd_path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
