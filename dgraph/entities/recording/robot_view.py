@@ -1,0 +1,306 @@
+"""RobotView: the robot's links in Rerun's 3D view, moving with the configuration ``q``."""
+
+from __future__ import annotations
+
+import functools
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.recording.recorder import safe_file_stem
+from dgraph.entities.recording.rerun_stream import RerunStream, open_stream
+
+FLOOR_HALF_SIZE = 2.0
+"""Half side of the floor square, in metres."""
+
+MESH_TYPES = {".stl": "model/stl", ".obj": "model/obj", ".glb": "model/gltf-binary", ".gltf": "model/gltf+json"}
+"""Mesh files Rerun's ``Asset3D`` reads, by (case-insensitive) extension."""
+
+
+@functools.lru_cache(maxsize=4)
+def load_robot(name: str) -> Any:
+    """``example_robot_data.load(name)`` (cached: the models are only read, never changed)."""
+    import example_robot_data as erd
+
+    return erd.load(name)
+
+
+def quaternions_xyzw(rotations: np.ndarray) -> np.ndarray:
+    """Unit quaternions ``(x, y, z, w)`` of rotation matrices ``(..., 3, 3)``, vectorised.
+
+    Each quaternion is computed from the largest of ``4 w^2, 4 x^2, 4 y^2, 4 z^2`` (the
+    numerically safe branch), chosen per matrix.
+    """
+    r = np.asarray(rotations, dtype=float)
+    m00, m01, m02 = r[..., 0, 0], r[..., 0, 1], r[..., 0, 2]
+    m10, m11, m12 = r[..., 1, 0], r[..., 1, 1], r[..., 1, 2]
+    m20, m21, m22 = r[..., 2, 0], r[..., 2, 1], r[..., 2, 2]
+    x2, y2, z2 = 1 + m00 - m11 - m22, 1 - m00 + m11 - m22, 1 - m00 - m11 + m22
+    w2 = 1 + m00 + m11 + m22
+    candidates = np.stack([  # (..., branch, xyzw), branch k is 4 q_k^2 times the quaternion / (2 sqrt(4 q_k^2))
+        np.stack([x2, m01 + m10, m02 + m20, m21 - m12], -1),
+        np.stack([m01 + m10, y2, m12 + m21, m02 - m20], -1),
+        np.stack([m02 + m20, m12 + m21, z2, m10 - m01], -1),
+        np.stack([m21 - m12, m02 - m20, m10 - m01, w2], -1),
+    ], -2)
+    branch = np.argmax(np.stack([x2, y2, z2, w2], -1), -1)[..., None, None]
+    q = np.take_along_axis(candidates, branch, -2)[..., 0, :]
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
+def _entity_name(name: str) -> str:
+    """A frame or geometry name usable as one Rerun entity-path part."""
+    return re.sub(r"[^A-Za-z0-9_\-]", "_", name) or "_"
+
+
+class _Link:
+    """A frame carrying visual geometries: its joint and its placement in the joint frame."""
+
+    __slots__ = ("frame", "geometries", "joint", "name", "placement")
+
+    def __init__(self, name: str, frame: int, joint: int, placement: Any):
+        self.name = name
+        self.frame = frame
+        self.joint = joint
+        self.placement = placement  # jMf, pinocchio.SE3
+        self.geometries: list[Any] = []
+
+
+@dg.register
+class RobotView(dg.Entity):
+    """Shows the robot in Rerun's 3D view (meshes once, then link poses over time).
+
+    At the first committed tick the visual geometries of the example-robot-data ``model`` are
+    logged once, as static data: an entity ``<path>/<link>/<geometry>`` per geometry, holding
+    the mesh (``Asset3D`` from its STL file, or a box / cylinder primitive) and, as a static
+    ``Transform3D``, its placement in the link frame and its ``meshScale``. A floor square
+    and world axes are logged beside ``<path>`` (``floor=True``).
+
+    Then, every ``decimation`` ticks, the link poses in the world are computed from ``q(t)``
+    (``pinocchio.forwardKinematics``, ``oMf = oMi[joint] * jMf`` for every link that carries a
+    geometry) and logged as ``Transform3D`` of ``<path>/<link>`` on the ``tick`` and ``time``
+    timelines (translation and quaternion). Like the :class:`Recorder`, it reads ``q`` in
+    :meth:`observe` and keeps the poses only when the tick commits; poses are buffered and sent
+    every ``flush_every`` ticks as one Arrow record batch holding a column per link and
+    component (one ``send_record_batch`` call: Rerun's cost is per call and per entity, not per
+    row), so TALOS (52 links) costs tens of µs per tick on average at ``decimation=20``.
+
+    It writes into the same Rerun recording as the graph's recorder: both open their sink
+    with :func:`~dgraph.entities.recording.rerun_stream.open_stream`, which shares one stream
+    per .rrd file (``save``; same default file ``out/<graph name>.rrd``) or per graph name
+    (``spawn``, ``serve``).
+
+    Parameters: ``model`` (example-robot-data name), ``decimation``, ``path`` (entity path
+    prefix), ``floor``, ``rerun`` (``save`` | ``spawn`` | ``serve``), ``rrd_path``,
+    ``flush_every``. Inputs: ``q`` (``nq``, Pinocchio convention: a free-flyer base is
+    ``x y z qx qy qz qw``).
+    """
+
+    observes = True
+    model = dg.Param("talos", kind="str", doc="example-robot-data robot name")
+    decimation = dg.Param(20, kind="int", minimum=1, doc="log the poses one tick in N (20: 50 Hz at 1 kHz)")
+    path = dg.Param("world/robot", kind="str", doc="Rerun entity path of the robot")
+    floor = dg.Param(True, kind="bool", doc="also log a floor square and world axes")
+    rerun = dg.Param("save", kind="str", choices=("save", "spawn", "serve"), doc="Rerun sink")
+    rrd_path = dg.Param(None, kind="str", doc=".rrd file for rerun=save (default out/<graph name>.rrd)")
+    flush_every = dg.Param(200, kind="int", minimum=1, doc="ticks buffered before a Rerun send")
+
+    q = dg.Input(shape=("nq",), doc="configuration (Pinocchio convention)")
+
+    def configure(self) -> None:
+        """Load the model; list the links that carry visual geometries."""
+        self.path = self.path.strip("/")
+        if not self.path or any(not part for part in self.path.split("/")):
+            raise dg.ParamError(f"{self.name}: path must be an entity path such as 'world/robot', got "
+                                f"{self.params['path']!r}", entity=self.name)
+        try:
+            robot = load_robot(self.model)
+        except Exception as exc:  # example-robot-data raises plain exceptions for unknown names
+            raise dg.ParamError(f"{self.name}: cannot load the robot {self.model!r}: {exc}",
+                                entity=self.name) from None
+        self.pin_model = robot.model
+        self.visual_model = robot.visual_model
+        self.nq = self.pin_model.nq
+        self.links = self._links()
+        self._joints = np.array([link.joint for link in self.links])
+        self._jMf = np.array([link.placement.homogeneous for link in self.links])
+        self._link_paths = [f"/{self.path}/{link.name}" for link in self.links]
+        self._schema: Any = None
+        self._data: Any = None
+        self._stream: RerunStream | None = None
+        self._statics_sent = False
+        self._staged: tuple[int, np.ndarray] | None = None
+        self._ticks: list[int] = []
+        self._poses: list[np.ndarray] = []
+        self._last_send: int | None = None
+        self.skipped: list[str] = []  # geometries that could not be drawn
+        self.closed = False
+
+    def _links(self) -> list[_Link]:
+        model = self.pin_model
+        links: dict[int, _Link] = {}
+        for geom in self.visual_model.geometryObjects:
+            frame = geom.parentFrame
+            if frame >= model.nframes or model.frames[frame].parentJoint != geom.parentJoint:
+                frame = -1 - geom.parentJoint  # no usable frame: the joint itself
+            link = links.get(frame)
+            if link is None:
+                if frame >= 0:
+                    f = model.frames[frame]
+                    link = _Link(_entity_name(f.name), frame, f.parentJoint, f.placement)
+                else:
+                    import pinocchio as pin
+                    link = _Link(_entity_name(model.names[geom.parentJoint]), frame, geom.parentJoint,
+                                 pin.SE3.Identity())
+                links[frame] = link
+            link.geometries.append(geom)
+        names = [link.name for link in links.values()]
+        for link in links.values():
+            if names.count(link.name) > 1:
+                link.name = f"{link.name}_{link.frame}"
+        return list(links.values())
+
+    # -- poses ----------------------------------------------------------------------------
+    def poses(self, q: np.ndarray) -> np.ndarray:
+        """World poses of the links (homogeneous matrices, shape ``(links, 4, 4)``) at ``q``."""
+        import pinocchio as pin
+
+        if self._data is None:
+            self._data = self.pin_model.createData()
+        data = self._data
+        pin.forwardKinematics(self.pin_model, data, q)
+        oMi = data.oMi
+        joints = np.array([oMi[j].homogeneous for j in range(self.pin_model.njoints)])
+        return joints[self._joints] @ self._jMf
+
+    # -- tick -----------------------------------------------------------------------------
+    def _open(self) -> RerunStream:
+        if self.graph is None:
+            raise dg.GraphError(f"{self.name}: a robot view must be in a graph", entity=self.name)
+        if self.rerun == "save" and not self.rrd_path:
+            self.rrd_path = f"out/{safe_file_stem(self.graph.name)}.rrd"
+        self._stream = open_stream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt)
+        return self._stream
+
+    def observe(self, t: int) -> None:
+        """Every ``decimation`` ticks, compute the link poses at ``q(t)``; kept if the tick commits."""
+        if self.closed:
+            return
+        if self._stream is None:
+            self._open()
+        first = not self._statics_sent and not self._ticks
+        self._staged = (t, self.poses(self.q(t))) if t % self.decimation == 0 or first else None
+
+    def commit_state(self, t_next: int) -> None:
+        """The tick committed: log the statics once, buffer the poses, send every ``flush_every``."""
+        staged, self._staged = self._staged, None
+        if staged is None or self._stream is None:
+            return
+        if not self._statics_sent:
+            self._log_statics()
+        t, pose = staged
+        self._ticks.append(t)
+        self._poses.append(pose)
+        if self._last_send is None:
+            self._last_send = t
+        if t - self._last_send >= self.flush_every:
+            self._send()
+
+    def _batch_schema(self) -> Any:
+        """Arrow schema of a batch of poses: ``tick``, ``time``, then per link its translation and
+        quaternion columns, tagged with Rerun's column metadata (entity path, component)."""
+        import pyarrow as pa
+
+        def component(path: str, name: str, ctype: str, size: int) -> Any:
+            item = pa.list_(pa.field("item", pa.float32(), nullable=False), size)
+            return pa.field(f"{path}:Transform3D:{name}", pa.list_(item), metadata={
+                "rerun:kind": "data", "rerun:entity_path": path, "rerun:archetype": "rerun.archetypes.Transform3D",
+                "rerun:component": f"Transform3D:{name}", "rerun:component_type": f"rerun.components.{ctype}"})
+
+        fields = [pa.field(n, t, metadata={"rerun:kind": "index", "rerun:index_name": n})
+                  for n, t in (("tick", pa.int64()), ("time", pa.duration("ns")))]
+        for path in self._link_paths:
+            fields += [component(path, "translation", "Translation3D", 3),
+                       component(path, "quaternion", "RotationQuat", 4)]
+        return pa.schema(fields)
+
+    def _send(self) -> None:
+        if not self._ticks or self._stream is None:
+            return
+        import pyarrow as pa
+
+        if self._schema is None:
+            self._schema = self._batch_schema()
+        ticks = np.array(self._ticks, dtype=np.int64)
+        poses = np.stack(self._poses, axis=1)  # (links, ticks, 4, 4)
+        self._ticks, self._poses = [], []
+        self._last_send = int(ticks[-1])
+        translations = poses[:, :, :3, 3].astype(np.float32)
+        quaternions = quaternions_xyzw(poses[:, :, :3, :3]).astype(np.float32)
+        offsets = pa.array(np.arange(len(ticks) + 1, dtype=np.int32))
+        columns = [index.as_arrow_array() for index in self._stream.indexes(ticks)]
+        fields = list(self._schema)[2:]
+        for k in range(len(self.links)):
+            for values, field in ((translations[k], fields[2 * k]), (quaternions[k], fields[2 * k + 1])):
+                rows = pa.FixedSizeListArray.from_arrays(values.ravel(), type=field.type.value_type)
+                columns.append(pa.ListArray.from_arrays(offsets, rows, type=field.type))
+        self._stream.rec.send_record_batch(pa.RecordBatch.from_arrays(columns, schema=self._schema))
+
+    def _log_statics(self) -> None:
+        stream = self._stream
+        assert stream is not None
+        rr, rec = stream._rr, stream.rec
+        self._statics_sent = True
+        root = self.path.split("/")[0]
+        rec.log(root, rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        if self.floor:
+            parent = self.path.rsplit("/", 1)[0] if "/" in self.path else ""
+            prefix = f"{parent}/" if parent else ""
+            rec.log(f"{prefix}floor", rr.Boxes3D(half_sizes=[[FLOOR_HALF_SIZE, FLOOR_HALF_SIZE, 0.0005]],
+                                                 centers=[[0.0, 0.0, -0.0005]], colors=[[150, 150, 150, 255]],
+                                                 fill_mode="solid"), static=True)
+            rec.log(f"{prefix}axes", rr.Arrows3D(origins=np.zeros((3, 3)), vectors=0.3 * np.eye(3),
+                                                 colors=[[255, 0, 0], [0, 200, 0], [0, 0, 255]]), static=True)
+        for link in self.links:
+            fMj = link.placement.inverse()
+            for geom in link.geometries:
+                fMg = fMj * geom.placement
+                shape = self._shape(rr, geom)
+                if shape is None:
+                    self.skipped.append(geom.name)  # neither a mesh file Rerun reads nor a primitive
+                    continue
+                rec.log(f"{self.path}/{link.name}/{_entity_name(geom.name)}",
+                        rr.Transform3D(translation=fMg.translation, mat3x3=fMg.rotation,
+                                       scale=np.asarray(geom.meshScale, dtype=float)),
+                        shape, static=True)
+
+    @staticmethod
+    def _shape(rr: Any, geom: Any) -> Any:
+        """The Rerun archetype drawing ``geom`` in its own frame, or ``None``."""
+        color = np.clip(np.asarray(geom.meshColor, dtype=float), 0.0, 1.0)
+        rgba = (255 * color).round().astype(np.uint8)
+        kind = type(geom.geometry).__name__
+        mesh = Path(geom.meshPath)
+        media_type = MESH_TYPES.get(mesh.suffix.lower())
+        if media_type is not None and mesh.is_file():
+            return rr.Asset3D(contents=mesh.read_bytes(), media_type=media_type, albedo_factor=rgba)
+        if kind == "Box":
+            return rr.Boxes3D(half_sizes=[np.asarray(geom.geometry.halfSide)], colors=[rgba], fill_mode="solid")
+        if kind == "Cylinder":
+            return rr.Cylinders3D(lengths=[2 * geom.geometry.halfLength], radii=[geom.geometry.radius],
+                                  colors=[rgba], fill_mode="solid")
+        if kind == "Sphere":
+            return rr.Ellipsoids3D(half_sizes=[[geom.geometry.radius] * 3], colors=[rgba], fill_mode="solid")
+        return None
+
+    def close(self) -> None:
+        """Send the buffered poses and release the shared stream (idempotent)."""
+        if self.closed:
+            return
+        self.closed = True
+        if self._stream is not None:
+            self._send()
+            self._stream.close()
