@@ -1,0 +1,178 @@
+"""Leg-odometry helpers for base estimators: robot model, frames, relative kinematics.
+
+Plain Python (no entity): the estimator entities build on these. Notation used by the
+estimators' docstrings: ``W`` world, ``B`` base (the free-flyer joint), ``I`` IMU frame,
+``F`` a foot frame (sole), ``S`` a force/torque sensor frame. ``R_XY`` is the rotation of
+frame ``Y`` in frame ``X`` and ``r_XY`` the position of the origin of ``Y`` in ``X``.
+
+:class:`RelativeKinematics` evaluates the robot *relative to its base*: with the free-flyer
+at the identity and at rest, one first-order ``forwardKinematics`` from the joint encoders
+``(q_j, qd_j)`` gives, for every frame ``X`` of interest, ``R_BX``, ``r_BX`` and its velocity
+relative to the base expressed in ``B``: ``d/dt r_BX = J_X^lin(q_j) qd_j`` and
+``w_BX = J_X^ang(q_j) qd_j`` (no Jacobian is formed).
+"""
+
+from __future__ import annotations
+
+import difflib
+import functools
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from dgraph.errors import ParamError
+
+
+@functools.lru_cache(maxsize=8)
+def _load_by_name(name: str) -> Any:
+    import example_robot_data as erd
+
+    return erd.load(name).model
+
+
+def load_model(model: Any, entity: str, label: str | None = None) -> Any:
+    """A ``pinocchio.Model`` from an example-robot-data name (cached) or a model itself.
+
+    The model is shared read-only; every estimator works on its own ``Data``. Errors are
+    :class:`ParamError` for ``entity`` (its name), messages start with ``label`` (default: the name).
+    """
+    label = label or entity
+    import pinocchio as pin
+
+    if isinstance(model, pin.Model):
+        return model
+    if not isinstance(model, str):
+        raise ParamError(f"{label}: model must be a robot name or a pinocchio.Model, got "
+                         f"{type(model).__name__}", entity=entity)
+    try:
+        return _load_by_name(model)
+    except Exception as exc:
+        raise ParamError(f"{label}: cannot load robot model {model!r}: {exc}", entity=entity) from None
+
+
+def frame_id(model: Any, name: str, entity: str, param: str, label: str | None = None) -> int:
+    """The id of frame ``name``; a :class:`ParamError` naming the entity, parameter and close names."""
+    label = label or entity
+    if not model.existFrame(name):
+        close = difflib.get_close_matches(name, [f.name for f in model.frames], n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        raise ParamError(f"{label}: parameter {param!r}: the model {model.name!r} has no frame "
+                         f"{name!r}{hint}", entity=entity)
+    return model.getFrameId(name)
+
+
+def default_imu_frame(model: Any) -> str:
+    """``imu_link`` if the model has it, else the frame of the free-flyer (``base_link``)."""
+    if model.existFrame("imu_link"):
+        return "imu_link"
+    for frame in model.frames:
+        if frame.parentJoint == 1 and frame.placement.isIdentity():
+            return frame.name
+    return model.frames[1].name
+
+
+def standing_configuration(model: Any, foot_frames: Sequence[str]) -> np.ndarray:
+    """Half-sitting (or neutral) configuration with the base height putting the lowest sole at z = 0."""
+    import pinocchio as pin
+
+    try:
+        q = np.array(model.referenceConfigurations["half_sitting"], dtype=float)
+    except (KeyError, IndexError, RuntimeError):
+        q = pin.neutral(model)
+    data = model.createData()
+    pin.forwardKinematics(model, data, q)
+    lowest = min(pin.updateFramePlacement(model, data, model.getFrameId(f)).translation[2] for f in foot_frames)
+    q[2] -= lowest
+    return q
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix of a quaternion ``[x, y, z, w]`` (normalised here)."""
+    x, y, z, w = q / math.sqrt(float(q @ q))
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def matrix_to_quat(r: np.ndarray) -> np.ndarray:
+    """Quaternion ``[x, y, z, w]`` (``w >= 0``) of a rotation matrix (Shepperd's method)."""
+    trace = r[0, 0] + r[1, 1] + r[2, 2]
+    if trace > 0:
+        s = 2.0 * math.sqrt(1.0 + trace)
+        q = [(r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s]
+    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = [0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s]
+    elif r[1, 1] > r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
+        q = [(r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
+        q = [(r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s]
+    out = np.array(q)
+    out /= math.sqrt(float(out @ out))
+    return -out if out[3] < 0 else out
+
+
+def contact_hysteresis(force: float, previous: bool, on: float, off: float) -> bool:
+    """Schmitt trigger: contact if ``force > on``, or if already in contact and ``force > off``."""
+    return force > on or (previous and force > off)
+
+
+def complementary_alpha(cutoff: float, dt: float) -> float:
+    """Weight of the integrated accelerometer: ``alpha = tau / (tau + dt)``, ``tau = 1 / (2 pi f_c)``.
+
+    ``f_c = inf`` gives ``alpha = 0`` (kinematics only).
+    """
+    tau = 1.0 / (2.0 * math.pi * cutoff)
+    return tau / (tau + dt)
+
+
+class FrameMotion:
+    """Placement and velocity of a frame relative to the base, in the base frame."""
+
+    __slots__ = ("angular", "linear", "rotation", "translation")
+
+    def __init__(self, rotation: np.ndarray, translation: np.ndarray, linear: np.ndarray, angular: np.ndarray):
+        self.rotation = rotation          # R_BX
+        self.translation = translation    # r_BX
+        self.linear = linear              # d/dt r_BX (base frame)
+        self.angular = angular            # w_BX, angular velocity of X relative to B, in B
+
+
+class RelativeKinematics:
+    """Frames of a free-flyer model relative to its base, from the joint encoders.
+
+    One ``pinocchio.forwardKinematics(model, data, q, v)`` with ``q = [0, 0, 0, 0, 0, 0, 1, q_j]``
+    and ``v = [0_6, qd_j]`` (base at the identity and at rest) on a private ``Data``, then
+    ``updateFramePlacement`` and ``getFrameVelocity(..., LOCAL_WORLD_ALIGNED)`` per frame.
+    """
+
+    def __init__(self, model: Any, frames: Sequence[int]):
+        import pinocchio as pin
+
+        self._pin = pin
+        self.model = model
+        self.data = model.createData()
+        self.frames = list(frames)
+        self._q = pin.neutral(model)
+        self._q[:7] = [0, 0, 0, 0, 0, 0, 1]
+        self._v = np.zeros(model.nv)
+        self._lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+    def update(self, q_joints: np.ndarray, v_joints: np.ndarray) -> dict[int, FrameMotion]:
+        """Motion of every frame (by id) relative to the base, for joint positions and velocities."""
+        pin, model, data = self._pin, self.model, self.data
+        self._q[7:] = q_joints
+        self._v[6:] = v_joints
+        pin.forwardKinematics(model, data, self._q, self._v)
+        out = {}
+        for fid in self.frames:
+            placement = pin.updateFramePlacement(model, data, fid)
+            motion = pin.getFrameVelocity(model, data, fid, self._lwa)
+            out[fid] = FrameMotion(placement.rotation, placement.translation, motion.linear, motion.angular)
+        return out
