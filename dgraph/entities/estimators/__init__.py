@@ -1,1 +1,6 @@
-"""estimators entities."""
+"""Estimators: the robot state (base pose and velocity, joints) from sensors, behind ``q`` / ``v`` ports."""
+
+from dgraph.entities.estimators.floating_base import FloatingBaseEstimator
+from dgraph.entities.estimators.ground_truth import GroundTruthEstimator
+
+__all__ = ["FloatingBaseEstimator", "GroundTruthEstimator"]

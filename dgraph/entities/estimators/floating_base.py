@@ -1,0 +1,277 @@
+"""FloatingBaseEstimator: base pose and velocity from the IMU, joint encoders and foot F/T sensors."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.estimators.leg_odometry import (
+    RelativeKinematics,
+    complementary_alpha,
+    contact_hysteresis,
+    default_imu_frame,
+    frame_id,
+    load_model,
+    matrix_to_quat,
+    quat_to_matrix,
+    standing_configuration,
+)
+
+
+class Estimate:
+    """Everything computed at one tick (the ``estimate`` output); read-only for readers."""
+
+    __slots__ = ("anchors", "base_velocity_world", "contacts", "next_position", "next_velocity", "q", "v")
+
+    def __init__(self, **values: Any):
+        for key, value in values.items():
+            setattr(self, key, value)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+@dg.register
+class FloatingBaseEstimator(dg.Entity):
+    r"""Floating-base estimator (in the spirit of Flayols et al., 2017): IMU + leg odometry.
+
+    Uses only the IMU, the joint encoders and the foot force/torque sensors (for contact
+    detection), never the true base. Notation (``leg_odometry``): ``W`` world, ``B`` base,
+    ``I`` IMU, ``F`` foot (sole) frame, ``S`` ankle F/T sensor frame; ``R_XY``, ``r_XY``
+    rotation and position of ``Y`` in ``X``; ``r_BX``, ``R_BX`` and the velocities relative to
+    the base ``rd_BX = J_X^lin(q_j) qd_j``, ``w_BX = J_X^ang(q_j) qd_j`` (in ``B``) come from one
+    forward kinematics of the encoders ``(q_j, qd_j)`` with the base at the identity.
+
+    At tick ``t``, from the inputs at ``t`` and the states at ``t`` (nothing else):
+
+    1. Orientation: ``R_WB = R_WI R_BI^T`` (``R_WI`` from the IMU quaternion; the IMU is on the
+       torso, so ``R_BI`` depends on the torso joints).
+    2. Angular velocity (gyro ``w_g`` in ``I``): ``w_g = R_BI^T (w_B + w_BI)``, so
+       ``w_B = R_BI w_g - w_BI`` (base frame, Pinocchio's ``v[3:6]``); ``w_W = R_WB w_B``.
+    3. Contacts: normal force ``f_k = e_z . (R_WB R_BS_k f_S_k)`` (sensor force along the world
+       vertical); ``c_k = f_k > f_on or (a_k and f_k > f_off)`` (hysteresis), ``a_k`` the state
+       "foot k was in contact at t-1 and has an anchor ``p_k``".
+    4. Position: weights ``w_k = f_k / sum f`` over the feet in contact. Over the feet that
+       stay in contact (``c_k and a_k``): ``p_WB = sum w_k (p_k - R_WB r_BF_k)`` (normalised
+       weights); with none, ``p_WB`` is the prediction state ``p~``. A foot touching down
+       (``c_k and not a_k``) is anchored at ``p_k = p_WB + R_WB r_BF_k``, consistent with
+       ``p_WB``; a foot off the ground is ignored.
+    5. Kinematic velocity (feet in contact do not move):
+       ``0 = v_WB + w_W x (R_WB r_BF_k) + R_WB rd_BF_k``, so
+       ``v_kin = -sum w_k (w_W x (R_WB r_BF_k) + R_WB rd_BF_k)``, carried to the IMU point:
+       ``v_I,kin = v_kin + w_W x (R_WB r_BI) + R_WB rd_BI``.
+    6. Complementary filter at the IMU point (where the accelerometer measures, so no lever
+       arm is neglected), with ``a_W = R_WI a_acc + g`` (``a_acc`` the proper acceleration,
+       ``g = (0, 0, -9.81)``), ``x`` the predicted IMU velocity state,
+       ``alpha = tau / (tau + dt)``, ``tau = 1 / (2 pi cutoff_frequency)``::
+
+           v_I(t)   = alpha x(t) + (1 - alpha) v_I,kin(t)     (x(t) alone with no contact)
+           x(t + 1) = v_I(t) + dt a_W(t)
+
+       i.e. ``V_I = tau s / (1 + tau s) (A_W / s) + 1 / (1 + tau s) V_I,kin``: the integrated
+       accelerometer above the cutoff, leg kinematics below. ``cutoff_frequency = inf`` is
+       kinematics only. Until a foot has touched once (state ``i`` false), there is no
+       prediction: ``v_I = v_I,kin`` (``alpha = 0``) at the first tick with a contact.
+       Base velocity: ``v_WB = v_I - w_W x (R_WB r_BI) - R_WB rd_BI``.
+    7. Outputs (Pinocchio conventions): ``q = [p_WB, quat_xyzw(R_WB), q_j]``,
+       ``v = [R_WB^T v_WB, w_B, qd_j]``.
+
+    Tick transition (``prepare_state`` at ``t`` stages, ``commit_state`` publishes at ``t + 1``):
+    ``a_k(t + 1) = c_k(t)``, ``p_k(t + 1) = p_k`` (the anchor used at ``t``),
+    ``x(t + 1)`` as above, ``i(t + 1) = i(t) or any c_k(t)``, ``p~(t + 1) = p_WB(t) + dt v_WB(t)``
+    (dead reckoning when no foot is on the ground). Initial state: no anchor, ``i`` false,
+    ``x = 0`` (used only if no foot touches at tick 0: the robot then starts at rest),
+    ``p~ = q0[:3]``; the feet in contact at tick 0 are anchored from ``q0[:3]`` and the IMU
+    orientation.
+
+    Parameters: ``model``, ``foot_frames``, ``ft_frames``, ``imu_frame``, ``contact_force_on``,
+    ``contact_force_off``, ``cutoff_frequency``, ``q0``, ``dt``.
+    Inputs: ``imu_orientation``, ``imu_angular_velocity``, ``imu_linear_acceleration``,
+    ``encoder_position``, ``encoder_velocity``, ``ft_left_ankle``, ``ft_right_ankle``.
+    Outputs: ``q``, ``v``, ``contact_left``, ``contact_right``, ``base_velocity_world``,
+    ``estimate`` (everything, as an object). States: ``anchor_left``, ``anchor_right``,
+    ``anchored_left``, ``anchored_right``, ``velocity_prediction``, ``velocity_initialised``,
+    ``position_prediction``.
+    """
+
+    has_state = True
+
+    model = dg.Param("talos", kind="object", doc="example-robot-data robot name or pinocchio.Model")
+    foot_frames = dg.Param(["left_sole_link", "right_sole_link"], kind="str_list",
+                           doc="left and right foot frames whose origin is anchored while in contact")
+    ft_frames = dg.Param(["leg_left_6_joint", "leg_right_6_joint"], kind="str_list",
+                         doc="left and right ankle F/T sensor frames")
+    imu_frame = dg.Param(None, kind="str", doc="IMU frame (default: imu_link if the model has it, else the base)")
+    contact_force_on = dg.Param(100.0, kind="float", minimum=0.0, doc="normal force (N) above which a foot touches")
+    contact_force_off = dg.Param(50.0, kind="float", minimum=0.0,
+                                 doc="normal force (N) below which a foot in contact leaves (<= on)")
+    cutoff_frequency = dg.Param(1.0, kind="float", minimum=1e-6,
+                                doc="complementary filter cutoff (Hz): kinematics below, accelerometer above")
+    q0 = dg.Param(None, kind="vector", doc="initial configuration; only the base position q0[:3] is used "
+                                           "(default: half-sitting with the soles at z = 0)")
+    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+
+    imu_orientation = dg.Input(shape=(4,), doc="quaternion [x, y, z, w] of the IMU frame in the world")
+    imu_angular_velocity = dg.Input(shape=(3,), doc="gyro, IMU frame (rad/s)")
+    imu_linear_acceleration = dg.Input(shape=(3,), doc="accelerometer: proper acceleration in the IMU frame (m/s2)")
+    encoder_position = dg.Input(shape=("nj",), doc="joint positions, model order (q[7:])")
+    encoder_velocity = dg.Input(shape=("nj_v",), doc="joint velocities, model order (v[6:])")
+    ft_left_ankle = dg.Input(shape=(6,), doc="left ankle wrench [force, torque] in its sensor frame")
+    ft_right_ankle = dg.Input(shape=(6,), doc="right ankle wrench [force, torque] in its sensor frame")
+
+    anchor_left = dg.State(shape=(3,), doc="world position of the left foot frame while in contact")
+    anchor_right = dg.State(shape=(3,), doc="world position of the right foot frame while in contact")
+    anchored_left = dg.State(shape=(), dtype="bool", doc="left foot was in contact at t-1 (anchor valid)")
+    anchored_right = dg.State(shape=(), dtype="bool", doc="right foot was in contact at t-1 (anchor valid)")
+    velocity_prediction = dg.State(shape=(3,), doc="complementary filter: predicted IMU velocity in the world")
+    velocity_initialised = dg.State(shape=(), dtype="bool",
+                                    doc="velocity_prediction holds a prediction (a foot has touched)")
+    position_prediction = dg.State(shape=(3,), doc="dead-reckoned base position (used with no contact)")
+
+    def configure(self) -> None:
+        """Load the model, resolve the frames, size the encoder inputs."""
+        entity = f"{self.name} ({self.type_name})"
+        self.pin_model = model = load_model(self.model, self.name, entity)
+        if model.njoints < 2 or model.joints[1].shortname() != "JointModelFreeFlyer":
+            raise dg.ParamError(f"{entity}: the model's first joint must be a free flyer", entity=self.name)
+        self.nq, self.nv = model.nq, model.nv
+        self.nj, self.nj_v = model.nq - 7, model.nv - 6
+        for param in ("foot_frames", "ft_frames"):
+            if len(getattr(self, param)) != 2:
+                raise dg.ParamError(f"{entity}: parameter {param!r} needs two frames (left, right), got "
+                                    f"{getattr(self, param)}", entity=self.name)
+        if self.contact_force_off > self.contact_force_on:
+            raise dg.ParamError(f"{entity}: contact_force_off ({self.contact_force_off}) must not exceed "
+                                f"contact_force_on ({self.contact_force_on})", entity=self.name)
+        self.imu_frame_name = self.imu_frame or default_imu_frame(model)
+        self._foot = [frame_id(model, f, self.name, "foot_frames", entity) for f in self.foot_frames]
+        self._ft = [frame_id(model, f, self.name, "ft_frames", entity) for f in self.ft_frames]
+        self._imu = frame_id(model, self.imu_frame_name, self.name, "imu_frame", entity)
+        if self.q0 is not None and self.q0.shape != (self.nq,):
+            raise dg.ParamError(f"{entity}: q0 has shape {self.q0.shape}, expected ({self.nq},)", entity=self.name)
+        self._kinematics = RelativeKinematics(model, dict.fromkeys([*self._foot, *self._ft, self._imu]))
+        self._gravity = np.array(model.gravity.linear, dtype=float)
+
+    def setup(self) -> None:
+        """Index the per-foot ports (left, right)."""
+        self._ft_in = (self.ft_left_ankle, self.ft_right_ankle)
+        self._anchor = (self.anchor_left, self.anchor_right)
+        self._anchored = (self.anchored_left, self.anchored_right)
+
+    def reset(self) -> None:
+        """No anchor, IMU at rest, base at ``q0[:3]``."""
+        q0 = self.q0 if self.q0 is not None else standing_configuration(self.pin_model, self.foot_frames)
+        for k in range(2):
+            self._anchor[k].set(np.zeros(3), 0)
+            self._anchored[k].set(False, 0)
+        self.velocity_prediction.set(np.zeros(3), 0)
+        self.velocity_initialised.set(False, 0)
+        self.position_prediction.set(np.array(q0[:3], dtype=float), 0)
+
+    # -- the estimate -----------------------------------------------------------------------
+    @dg.output(dtype="object", depends=(
+        "imu_orientation", "imu_angular_velocity", "imu_linear_acceleration", "encoder_position",
+        "encoder_velocity", "ft_left_ankle", "ft_right_ankle", "anchor_left", "anchor_right",
+        "anchored_left", "anchored_right", "velocity_prediction", "velocity_initialised", "position_prediction"))
+    def estimate(self, t: int) -> Any:
+        """Everything estimated at ``t`` (an ``Estimate``: q, v, contacts, anchors, next states)."""
+        q_j, qd_j = self.encoder_position(t), self.encoder_velocity(t)
+        frames = self._kinematics.update(q_j, qd_j)
+        imu = frames[self._imu]
+        r_wi = quat_to_matrix(self.imu_orientation(t))
+        r_wb = r_wi @ imu.rotation.T                                        # (1)
+        w_b = imu.rotation @ self.imu_angular_velocity(t) - imu.angular     # (2)
+        w_w = r_wb @ w_b
+
+        forces, contacts, feet_w = [], [], []
+        for k in range(2):                                                  # (3)
+            wrench = self._ft_in[k](t)
+            f_n = float(r_wb[2] @ (frames[self._ft[k]].rotation @ wrench[:3]))
+            anchored = bool(self._anchored[k](t))
+            forces.append(f_n)
+            contacts.append(contact_hysteresis(f_n, anchored, self.contact_force_on, self.contact_force_off))
+            feet_w.append(r_wb @ frames[self._foot[k]].translation)         # R_WB r_BF
+
+        staying = [k for k in range(2) if contacts[k] and self._anchored[k](t)]
+        if staying:                                                         # (4)
+            total = sum(forces[k] for k in staying)
+            p_wb = sum((forces[k] / total) * (self._anchor[k](t) - feet_w[k]) for k in staying)
+        else:
+            p_wb = np.array(self.position_prediction(t), dtype=float)
+        anchors = []
+        for k in range(2):
+            if k in staying:
+                anchors.append(self._anchor[k](t))
+            elif contacts[k]:
+                anchors.append(p_wb + feet_w[k])
+            else:
+                anchors.append(None)
+
+        r_bi_w = r_wb @ imu.translation                                     # R_WB r_BI
+        lever = _cross(w_w, r_bi_w) + r_wb @ imu.linear                     # v_I - v_WB
+        x = self.velocity_prediction(t)
+        in_contact = [k for k in range(2) if contacts[k]]
+        if in_contact:                                                      # (5)
+            total = sum(forces[k] for k in in_contact)
+            v_kin = -sum((forces[k] / total) * (_cross(w_w, feet_w[k]) + r_wb @ frames[self._foot[k]].linear)
+                         for k in in_contact)
+            alpha = complementary_alpha(self.cutoff_frequency, self.dt) if self.velocity_initialised(t) else 0.0
+            v_i = alpha * x + (1.0 - alpha) * (v_kin + lever)               # (6)
+        else:
+            v_i = np.array(x, dtype=float)
+        v_wb = v_i - lever
+        a_w = r_wi @ self.imu_linear_acceleration(t) + self._gravity
+
+        q = np.concatenate([p_wb, matrix_to_quat(r_wb), q_j])               # (7)
+        v = np.concatenate([r_wb.T @ v_wb, w_b, qd_j])
+        return Estimate(q=q, v=v, contacts=contacts, anchors=anchors, base_velocity_world=v_wb,
+                        next_velocity=v_i + self.dt * a_w, next_position=p_wb + self.dt * v_wb)
+
+    @dg.output(shape=("nq",), depends=("estimate",))
+    def q(self, t: int) -> Any:
+        """Estimated configuration ``[base position, base quaternion xyzw, joints]``."""
+        return self.estimate(t).q
+
+    @dg.output(shape=("nv",), depends=("estimate",))
+    def v(self, t: int) -> Any:
+        """Estimated velocity ``[base linear (base frame), base angular (base frame), joints]``."""
+        return self.estimate(t).v
+
+    @dg.output(shape=(), dtype="bool", depends=("estimate",))
+    def contact_left(self, t: int) -> Any:
+        """The left foot is in contact (force hysteresis)."""
+        return self.estimate(t).contacts[0]
+
+    @dg.output(shape=(), dtype="bool", depends=("estimate",))
+    def contact_right(self, t: int) -> Any:
+        """The right foot is in contact (force hysteresis)."""
+        return self.estimate(t).contacts[1]
+
+    @dg.output(shape=(3,), depends=("estimate",))
+    def base_velocity_world(self, t: int) -> Any:
+        """Fused linear velocity of the base origin in the world frame."""
+        return self.estimate(t).base_velocity_world
+
+    # -- tick transition ----------------------------------------------------------------------
+    def prepare_state(self, t: int) -> None:
+        """Stage the contact flags, anchors and filter states computed from the values at ``t``."""
+        est = self.estimate(t)
+        for k in range(2):
+            self._anchored[k].stage(est.contacts[k])
+            anchor = est.anchors[k]
+            self._anchor[k].stage(anchor if anchor is not None else self._anchor[k](t))
+        self.velocity_prediction.stage(est.next_velocity)
+        self.velocity_initialised.stage(bool(self.velocity_initialised(t)) or any(est.contacts))
+        self.position_prediction.stage(est.next_position)
+
+    def commit_state(self, t_next: int) -> None:
+        """Publish the staged states at ``t + 1``."""
+        for state in (*self._anchor, *self._anchored, self.velocity_prediction, self.velocity_initialised,
+                      self.position_prediction):
+            state.commit(t_next)
+
+
+__all__ = ["Estimate", "FloatingBaseEstimator"]
