@@ -1,1 +1,6 @@
-"""contacts entities."""
+"""Contacts: rigid contacts and their force variables for inverse-dynamics solvers."""
+
+from dgraph.entities.contacts.constraint import ContactConstraint
+from dgraph.entities.contacts.contact6d import Contact6d
+
+__all__ = ["Contact6d", "ContactConstraint"]

@@ -1,1 +1,6 @@
-"""robot entities."""
+"""Robot models: the Pinocchio pass shared by features, tasks, contacts and solvers."""
+
+from dgraph.entities.robot.model import RobotModel
+from dgraph.entities.robot.robot_state import RobotState, load_model
+
+__all__ = ["RobotModel", "RobotState", "load_model"]

@@ -1,0 +1,41 @@
+"""ContactConstraint: what a contact contributes to an inverse-dynamics QP at one tick."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, slots=True)
+class ContactConstraint:
+    """A contact's rows for the solver (``k`` force variables, ``nv`` accelerations).
+
+    - motion: ``jacobian a = motion_rhs`` (6 x nv, the contact frame's body twist);
+    - forces: ``f`` (k) produce the contact wrench ``force_generator f`` (6, contact frame),
+      hence the generalized force ``jacobian^T force_generator f``;
+    - friction and normal-force bounds: ``friction_lower <= friction_matrix f <= friction_upper``;
+    - ``force_weight``: regularisation ``force_weight ||f||^2`` in the cost;
+    - ``rotation``: the contact frame's orientation in the world (to report world wrenches).
+    """
+
+    name: str
+    active: bool
+    jacobian: np.ndarray
+    motion_rhs: np.ndarray
+    force_generator: np.ndarray
+    friction_matrix: np.ndarray
+    friction_lower: np.ndarray
+    friction_upper: np.ndarray
+    force_weight: float
+    rotation: np.ndarray
+
+    @property
+    def n_forces(self) -> int:
+        """Number of force variables."""
+        return self.force_generator.shape[1]
+
+    def world_wrench(self, forces: np.ndarray) -> np.ndarray:
+        """The contact wrench ``[force, torque]`` at the contact frame origin, world axes."""
+        wrench = self.force_generator @ forces
+        return np.concatenate([self.rotation @ wrench[:3], self.rotation @ wrench[3:]])

@@ -1,0 +1,158 @@
+"""Contact6d: a unilateral rectangular plane contact (a foot sole) with four corner forces."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+import dgraph as dg
+from dgraph.entities.contacts.constraint import ContactConstraint
+from dgraph.entities.robot.robot_state import LOCAL, RobotState
+
+
+def corner_positions(front: float, back: float, half_width: float) -> np.ndarray:
+    """The four sole corners in the contact frame (rows), sole plane ``z = 0``."""
+    return np.array([[front, half_width, 0.0], [front, -half_width, 0.0],
+                     [-back, half_width, 0.0], [-back, -half_width, 0.0]])
+
+
+def force_generator(corners: np.ndarray) -> np.ndarray:
+    """``T`` (6 x 3n): stacked corner forces to the wrench ``[sum f_i, sum p_i x f_i]``."""
+    n = len(corners)
+    generator = np.zeros((6, 3 * n))
+    for i, p in enumerate(corners):
+        generator[:3, 3 * i:3 * i + 3] = np.eye(3)
+        generator[3:, 3 * i:3 * i + 3] = pin.skew(p)
+    return generator
+
+
+def friction_pyramid(n_corners: int, mu: float) -> np.ndarray:
+    """Rows ``C`` with ``C f <= 0`` for a four-face pyramid per corner, inscribed in the cone.
+
+    For each corner force ``(fx, fy, fz)``: ``+-fx <= mu' fz`` and ``+-fy <= mu' fz`` with
+    ``mu' = mu / sqrt(2)``, so the pyramid lies inside Coulomb's cone ``||f_t|| <= mu fz``
+    (thesis Eq. 2.11) and ``fz >= 0`` follows.
+    """
+    inner = mu / np.sqrt(2.0)
+    faces = np.array([[1.0, 0.0, -inner], [-1.0, 0.0, -inner], [0.0, 1.0, -inner], [0.0, -1.0, -inner]])
+    rows = np.zeros((4 * n_corners, 3 * n_corners))
+    for i in range(n_corners):
+        rows[4 * i:4 * i + 4, 3 * i:3 * i + 3] = faces
+    return rows
+
+
+@dg.register
+class Contact6d(dg.Entity):
+    """A rigid planar contact of a robot frame (thesis §2.4, Eq. 4.10–4.11; TSID's Contact6d).
+
+    Motion: the contact frame must not accelerate, with a PD correction of drift from the
+    anchor placement ``M_a`` (the frame's placement when the contact became active):
+    ``J a + J_dot v = -Kp e - Kd V``, where ``V = J v`` is the body twist (local frame),
+    ``e = [R^T (p - p_a), log3(R_a^T R)]`` and ``J``, ``J_dot v`` are in the local frame.
+
+    Forces: one 3D force per sole corner (12 variables, contact frame); wrench
+    ``w = T f`` (Eq. 4.11); friction pyramid per corner (inscribed, see
+    :func:`friction_pyramid`), hence unilateral corners, hence a centre of pressure inside the
+    sole (Eq. 2.13–2.15); total normal force within ``[min_normal_force, max_normal_force]``.
+
+    Parameters: ``frame`` (contact frame, z along the sole normal, origin on the sole),
+    ``front``, ``back``, ``half_width`` (sole corners, m; TALOS: 0.10, 0.11, 0.069),
+    ``mu`` (0.3), ``min_normal_force`` (N), ``max_normal_force`` (N),
+    ``force_weight`` (regularisation of the forces in the cost).
+    Inputs: ``robot`` (RobotModel state), ``kp``, ``kd`` (drift correction gains; 0: the
+    rigid constraint ``J a + J_dot v = 0``), ``active`` (bool; commands ``activate`` /
+    ``deactivate`` set it; an inactive contact adds nothing to the QP).
+    State: ``anchor`` (the anchored placement, ``None`` while inactive).
+    Outputs: ``contact`` (:class:`ContactConstraint`), ``error`` (``e``, 6).
+    """
+
+    has_state = True
+
+    frame = dg.Param(kind="str", doc="contact frame (z = sole normal)")
+    front = dg.Param(0.10, kind="float", minimum=0.0, doc="sole length in front of the frame origin (m)")
+    back = dg.Param(0.11, kind="float", minimum=0.0, doc="sole length behind the frame origin (m)")
+    half_width = dg.Param(0.069, kind="float", minimum=0.0, doc="half width of the sole (m)")
+    mu = dg.Param(0.3, kind="float", minimum=0.0, doc="friction coefficient")
+    min_normal_force = dg.Param(1.0, kind="float", minimum=0.0, doc="minimum total normal force (N)")
+    max_normal_force = dg.Param(1000.0, kind="float", minimum=0.0, doc="maximum total normal force (N)")
+    force_weight = dg.Param(1e-5, kind="float", minimum=0.0, doc="weight of ||f||^2 in the cost")
+
+    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+    kp = dg.Input(default=0.0, doc="drift-correction stiffness (scalar or 6)")
+    kd = dg.Input(default=0.0, doc="drift-correction damping (scalar or 6)")
+    active = dg.Input(shape=(), dtype="bool", default=True, doc="whether the contact is in the QP")
+    anchor = dg.State(dtype="object", doc="anchored placement (pinocchio.SE3) or None")
+
+    def configure(self) -> None:
+        """Precompute the force generator and the friction rows."""
+        if self.max_normal_force < self.min_normal_force:
+            raise dg.ParamError(f"{self.name}: max_normal_force < min_normal_force", entity=self.name)
+        corners = corner_positions(self.front, self.back, self.half_width)
+        self._generator = force_generator(corners)
+        pyramid = friction_pyramid(len(corners), self.mu)
+        normal_sum = np.zeros((1, 3 * len(corners)))
+        normal_sum[0, 2::3] = 1.0
+        self._friction = np.vstack([pyramid, normal_sum])
+        self._lower = np.concatenate([np.full(len(pyramid), -np.inf), [self.min_normal_force]])
+        self._upper = np.concatenate([np.zeros(len(pyramid)), [self.max_normal_force]])
+        self._frame_id: int | None = None
+
+    def reset(self) -> None:
+        """No anchor until the first tick in contact."""
+        self.anchor.set(None, 0)
+
+    @dg.command
+    def activate(self) -> None:
+        """Add the contact (anchored where the frame is at the next tick)."""
+        self.active.set(True)
+
+    @dg.command
+    def deactivate(self) -> None:
+        """Remove the contact from the QP."""
+        self.active.set(False)
+
+    def _frame(self, state: RobotState) -> int:
+        if self._frame_id is None:
+            try:
+                self._frame_id = state.frame_id(self.frame)
+            except KeyError:
+                raise dg.ParamError(f"{self.name}: the robot model has no frame {self.frame!r}",
+                                    entity=self.name) from None
+        return self._frame_id
+
+    def _anchor(self, t: int) -> pin.SE3:
+        """The anchored placement, or the current one before the first anchoring tick."""
+        anchor = self.anchor(t)
+        return anchor if anchor is not None else self.robot(t).frame_placement(self._frame(self.robot(t)))
+
+    @dg.output(shape=(6,), depends=("robot", "anchor"))
+    def error(self, t: int) -> np.ndarray:
+        """``e = [R^T (p - p_a), log3(R_a^T R)]`` (local frame)."""
+        state = self.robot(t)
+        placement, anchor = state.frame_placement(self._frame(state)), self._anchor(t)
+        rotation = placement.rotation
+        return np.concatenate([rotation.T @ (placement.translation - anchor.translation),
+                               pin.log3(anchor.rotation.T @ rotation)])
+
+    @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "anchor", "error"))
+    def contact(self, t: int) -> ContactConstraint:
+        """Motion rows, force generator and friction rows at ``t``."""
+        state = self.robot(t)
+        frame = self._frame(state)
+        twist = state.frame_velocity(frame, LOCAL)
+        desired = -np.asarray(self.kp(t)) * self.error(t) - np.asarray(self.kd(t)) * twist
+        return ContactConstraint(self.name, bool(self.active(t)), state.frame_jacobian(frame, LOCAL),
+                                 desired - state.frame_drift(frame, LOCAL), self._generator, self._friction,
+                                 self._lower, self._upper, self.force_weight,
+                                 state.frame_placement(frame).rotation)
+
+    def prepare_state(self, t: int) -> None:
+        """Anchor at the first active tick; forget the anchor when inactive."""
+        if not self.active(t):
+            self.anchor.stage(None)
+        else:
+            self.anchor.stage(pin.SE3(self._anchor(t)))
+
+    def commit_state(self, t_next: int) -> None:
+        """Publish the anchor."""
+        self.anchor.commit(t_next)

@@ -1,0 +1,73 @@
+"""Feature: the base class of task-space features (error, its rate, Jacobian and drift)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.robot.robot_state import RobotState
+
+
+@dataclass(frozen=True, slots=True)
+class FeatureValue:
+    """What a task needs from a feature at one tick (``m`` rows, ``nv`` columns).
+
+    ``x_dot = J v`` and ``x_ddot = J a + drift``; ``error = x (-) x*`` (a Lie-group difference
+    where ``x`` lives on a group), ``error_velocity = x_dot - x_dot*``, and
+    ``reference_acceleration = x_ddot*``.
+    """
+
+    error: np.ndarray
+    error_velocity: np.ndarray
+    jacobian: np.ndarray
+    drift: np.ndarray
+    reference_acceleration: np.ndarray
+
+    def select(self, rows: np.ndarray | None) -> FeatureValue:
+        """The same feature restricted to ``rows`` (``None``: all)."""
+        if rows is None:
+            return self
+        return FeatureValue(self.error[rows], self.error_velocity[rows], self.jacobian[rows],
+                            self.drift[rows], self.reference_acceleration[rows])
+
+
+def parse_mask(entity: dg.Entity, mask: str, width: int) -> np.ndarray | None:
+    """Rows selected by a mask string such as ``"000111"`` (``None`` when all are selected)."""
+    if len(mask) != width or set(mask) - {"0", "1"} or "1" not in mask:
+        raise dg.ParamError(f"{entity.name}: mask must be {width} characters 0/1 with at least one 1, "
+                            f"got {mask!r}", entity=entity.name)
+    rows = np.flatnonzero([c == "1" for c in mask])
+    return None if len(rows) == width else rows
+
+
+class Feature(dg.Entity):
+    """Base of features: subclasses implement :meth:`evaluate` on the robot's shared state.
+
+    Input: ``robot`` (the ``state`` output of a :class:`~dgraph.entities.robot.RobotModel`).
+    Outputs: ``feature`` (a :class:`FeatureValue`, what a task plugs), ``error`` (``x (-) x*``)
+    and ``error_velocity`` (for plots). Subclasses set ``self.size`` (rows after the mask)
+    and ``self.rows`` (mask rows or None) in ``configure``.
+    """
+
+    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+
+    def evaluate(self, state: RobotState, t: int) -> FeatureValue:
+        """The full (unmasked) feature at ``t`` (override)."""
+        raise NotImplementedError
+
+    @dg.output(dtype="object")
+    def feature(self, t: int) -> FeatureValue:
+        """Error, error rate, Jacobian, drift and reference acceleration (masked rows)."""
+        return self.evaluate(self.robot(t), t).select(self.rows)
+
+    @dg.output(shape=("size",), depends=("feature",))
+    def error(self, t: int) -> np.ndarray:
+        """``x (-) x*``."""
+        return self.feature(t).error
+
+    @dg.output(shape=("size",), depends=("feature",))
+    def error_velocity(self, t: int) -> np.ndarray:
+        """``x_dot - x_dot*``."""
+        return self.feature(t).error_velocity

@@ -1,0 +1,137 @@
+"""RobotModel: the Pinocchio model of a robot, evaluated once per tick for every reader."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.robot.robot_state import RobotState, homogeneous, load_model
+
+
+def _frame_outputs(frame: str, frame_id: int) -> dict[str, dg.Output]:
+    """The four per-frame outputs of :class:`RobotModel`, read from the shared ``state``."""
+
+    def placement(self: RobotModel, t: int) -> np.ndarray:
+        return homogeneous(self.state(t).frame_placement(frame_id))
+
+    def velocity(self: RobotModel, t: int) -> np.ndarray:
+        return self.state(t).frame_velocity(frame_id)
+
+    def jacobian(self: RobotModel, t: int) -> np.ndarray:
+        return self.state(t).frame_jacobian(frame_id)
+
+    def drift(self: RobotModel, t: int) -> np.ndarray:
+        return self.state(t).frame_drift(frame_id)
+
+    nv = ("nv",)
+    return {
+        f"{frame}_placement": dg.Output(placement, shape=(4, 4), depends=("state",),
+                                        doc=f"world placement of {frame} (4 x 4 homogeneous)"),
+        f"{frame}_velocity": dg.Output(velocity, shape=(6,), depends=("state",),
+                                       doc=f"[p_dot, omega] of {frame}, world axes"),
+        f"{frame}_jacobian": dg.Output(jacobian, shape=(6, *nv), depends=("state",),
+                                       doc=f"Jacobian of {frame}, world axes at the frame origin"),
+        f"{frame}_drift": dg.Output(drift, shape=(6,), depends=("state",),
+                                    doc=f"J_dot v of {frame}: classical acceleration at a = 0, world axes"),
+    }
+
+
+@dg.register
+class RobotModel(dg.Entity):
+    """Rigid-body model of a robot (Pinocchio): one shared computation per tick.
+
+    Inputs: ``q`` (nq, Pinocchio convention: free-flyer ``[xyz, quaternion xyzw]`` then
+    joints), ``v`` (nv: base linear and angular velocity in the base frame, then joints).
+
+    ``state`` runs the Pinocchio pass once per tick (:class:`RobotState`: ``computeAllTerms``,
+    then kinematics at ``a = 0`` for the drifts); every other output, and every feature, task
+    and contact plugged to ``state``, reads from it. Outputs (thesis Eq. 2.1–2.4, 2.32):
+
+    - ``mass_matrix`` ``M(q)`` (nv x nv), ``bias_forces`` ``h = C(q, v) v + g(q)`` (nv), so
+      ``M a + h = S^T tau + J_c^T f``;
+    - ``com_position`` ``c``, ``com_velocity`` ``c_dot = J_com v``, ``com_jacobian``
+      ``J_com`` (3 x nv), ``com_drift`` ``J_com_dot v``;
+    - ``centroidal_momentum_matrix`` ``A_G`` (6 x nv, ``h_G = [l, k] = A_G v``),
+      ``centroidal_momentum`` ``h_G``, ``centroidal_drift`` ``A_G_dot v``;
+    - for each frame named in ``frames``: ``<frame>_placement`` (4 x 4), ``<frame>_velocity``
+      ``[p_dot, omega]``, ``<frame>_jacobian`` and ``<frame>_drift`` ``J_dot v``, all with
+      world axes at the frame origin (see :mod:`dgraph.entities.robot.robot_state`).
+
+    Parameters: ``model`` (example-robot-data name, default ``talos``, or a ``pin.Model``),
+    ``frames`` (frame names whose kinematics are published).
+    """
+
+    model = dg.Param("talos", kind="object", doc="example-robot-data robot name or pinocchio.Model")
+    frames = dg.Param((), kind="str_list", doc="frames whose placement, velocity, Jacobian and drift are outputs")
+
+    q = dg.Input(shape=("nq",), doc="configuration (Pinocchio convention)")
+    v = dg.Input(shape=("nv",), doc="generalized velocity (Pinocchio convention)")
+
+    def configure(self) -> None:
+        """Load the model and declare the per-frame outputs."""
+        if not isinstance(self.model, str) and type(self.model).__name__ != "Model":
+            raise dg.ParamError(f"{self.name}: model must be a robot name or a pinocchio.Model", entity=self.name)
+        try:
+            self.pin_model = load_model(self.model)
+        except Exception as exc:
+            raise dg.ParamError(f"{self.name}: cannot load robot model {self.model!r}: {exc}",
+                                entity=self.name) from None
+        self.nq, self.nv = self.pin_model.nq, self.pin_model.nv
+        self._data = self.pin_model.createData()
+        for frame in self.frames:
+            if not self.pin_model.existFrame(frame):
+                raise dg.ParamError(f"{self.name}: the model has no frame {frame!r}", entity=self.name)
+            if not frame.isidentifier():
+                raise dg.ParamError(f"{self.name}: frame name {frame!r} cannot name a signal", entity=self.name)
+            for name, out in _frame_outputs(frame, self.pin_model.getFrameId(frame)).items():
+                self.declare(name, out)
+
+    @dg.output(dtype="object", depends=("q", "v"))
+    def state(self, t: int) -> RobotState:
+        """The shared Pinocchio pass at ``(q(t), v(t))``."""
+        return RobotState(self.pin_model, self._data, self.q(t), self.v(t))
+
+    @dg.output(shape=("nv", "nv"), depends=("state",))
+    def mass_matrix(self, t: int) -> np.ndarray:
+        """``M(q)``, symmetric."""
+        return self.state(t).mass_matrix
+
+    @dg.output(shape=("nv",), depends=("state",))
+    def bias_forces(self, t: int) -> np.ndarray:
+        """``h = C(q, v) v + g(q)``."""
+        return self.state(t).bias_forces
+
+    @dg.output(shape=(3,), depends=("state",), labels=("x", "y", "z"))
+    def com_position(self, t: int) -> np.ndarray:
+        """CoM position in the world frame."""
+        return self.state(t).com_position
+
+    @dg.output(shape=(3,), depends=("state",), labels=("x", "y", "z"))
+    def com_velocity(self, t: int) -> np.ndarray:
+        """CoM velocity ``J_com v``."""
+        return self.state(t).com_velocity
+
+    @dg.output(shape=(3, "nv"), depends=("state",))
+    def com_jacobian(self, t: int) -> np.ndarray:
+        """``J_com``."""
+        return self.state(t).com_jacobian
+
+    @dg.output(shape=(3,), depends=("state",))
+    def com_drift(self, t: int) -> np.ndarray:
+        """``J_com_dot v``."""
+        return self.state(t).com_drift
+
+    @dg.output(shape=(6, "nv"), depends=("state",))
+    def centroidal_momentum_matrix(self, t: int) -> np.ndarray:
+        """``A_G``."""
+        return self.state(t).centroidal_momentum_matrix
+
+    @dg.output(shape=(6,), depends=("state",), labels=("lx", "ly", "lz", "kx", "ky", "kz"))
+    def centroidal_momentum(self, t: int) -> np.ndarray:
+        """``h_G = A_G v``."""
+        return self.state(t).centroidal_momentum
+
+    @dg.output(shape=(6,), depends=("state",))
+    def centroidal_drift(self, t: int) -> np.ndarray:
+        """``A_G_dot v``."""
+        return self.state(t).centroidal_drift

@@ -1,0 +1,141 @@
+"""RobotState: one Pinocchio pass at (q, v) that every reader of the robot model shares.
+
+Frame conventions used throughout dgraph's robot entities:
+
+- ``world`` quantities ("local world aligned", Pinocchio's ``LOCAL_WORLD_ALIGNED``) sit at the
+  frame origin with world-aligned axes: velocity ``[p_dot, omega]``, Jacobian ``J`` with
+  ``[p_dot, omega] = J v``, drift ``[p_ddot, omega_dot]`` at ``a = 0`` (the classical
+  acceleration, so ``[p_ddot, omega_dot] = J a + drift``).
+- ``local`` quantities (Pinocchio's ``LOCAL``) are the body twist ``V = J_local v`` and its
+  time derivative ``V_dot = J_local a + drift_local``, the spatial acceleration at ``a = 0``.
+  Contact forces are expressed in the local frame, so contacts use these.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+LOCAL = pin.ReferenceFrame.LOCAL
+
+
+class RobotState:
+    """Kinematics and dynamics of ``model`` at ``(q, v)``, computed once.
+
+    The constructor runs ``computeAllTerms`` (mass matrix, nonlinear effects, joint Jacobians,
+    CoM and its Jacobian, centroidal momentum matrix), then ``forwardKinematics(q, v, 0)`` and
+    the CoM at that acceleration level, so that accelerations read at ``a = 0`` are the drifts ``J_dot v``.
+    Frame quantities are computed on request from that data (a few µs each).
+    """
+
+    def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray):
+        self.model, self.data, self.q, self.v = model, data, q, v
+        zero = np.zeros(model.nv)
+        pin.computeAllTerms(model, data, q, v)
+        pin.forwardKinematics(model, data, q, v, zero)
+        pin.updateFramePlacements(model, data)
+        pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
+        self.mass_matrix = data.M.copy()  # Pinocchio 4 fills both triangles (checked by a test)
+        self.bias_forces = data.nle.copy()
+        self._centroidal_drift: np.ndarray | None = None
+
+    # -- whole body -------------------------------------------------------------------------
+    @property
+    def total_mass(self) -> float:
+        """Total mass in kg."""
+        return float(self.data.mass[0])
+
+    @property
+    def com_position(self) -> np.ndarray:
+        """Centre of mass ``c`` in the world frame."""
+        return self.data.com[0].copy()
+
+    @property
+    def com_velocity(self) -> np.ndarray:
+        """``c_dot = J_com v``."""
+        return self.data.vcom[0].copy()
+
+    @property
+    def com_jacobian(self) -> np.ndarray:
+        """``J_com`` (3 x nv)."""
+        return self.data.Jcom.copy()
+
+    @property
+    def com_drift(self) -> np.ndarray:
+        """``J_com_dot v``: the CoM acceleration at ``a = 0``."""
+        return self.data.acom[0].copy()
+
+    @property
+    def centroidal_momentum_matrix(self) -> np.ndarray:
+        """``A_G`` (6 x nv): ``h_G = [l, k] = A_G v`` at the CoM, world axes."""
+        return self.data.Ag.copy()
+
+    @property
+    def centroidal_momentum(self) -> np.ndarray:
+        """``h_G = [l, k]`` (linear, angular) at the CoM."""
+        return self.data.Ag @ self.v
+
+    @property
+    def centroidal_drift(self) -> np.ndarray:
+        """``A_G_dot v``: the momentum rate at ``a = 0`` (computed on first request)."""
+        if self._centroidal_drift is None:
+            model, data = self.model, self.data
+            dhg = pin.computeCentroidalMomentumTimeVariation(model, data, self.q, self.v, np.zeros(model.nv))
+            self._centroidal_drift = np.concatenate([dhg.linear, dhg.angular])
+        return self._centroidal_drift
+
+    def gravity_torque(self) -> np.ndarray:
+        """``g(q)``, the generalized gravity (used by fallbacks; computed on request)."""
+        return pin.computeGeneralizedGravity(self.model, self.model.createData(), self.q).copy()
+
+    # -- frames -----------------------------------------------------------------------------
+    def frame_id(self, name: str) -> int:
+        """The Pinocchio id of frame ``name`` (KeyError if unknown)."""
+        if not self.model.existFrame(name):
+            raise KeyError(name)
+        return self.model.getFrameId(name)
+
+    def frame_placement(self, frame: int) -> pin.SE3:
+        """World placement ``oMf`` of a frame."""
+        return self.data.oMf[frame]
+
+    def frame_velocity(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> np.ndarray:
+        """Frame twist ``[linear, angular]`` (``WORLD``: ``[p_dot, omega]``; ``LOCAL``: body twist)."""
+        return pin.getFrameVelocity(self.model, self.data, frame, ref).vector
+
+    def frame_jacobian(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> np.ndarray:
+        """Frame Jacobian (6 x nv) in the convention ``ref``."""
+        return pin.getFrameJacobian(self.model, self.data, frame, ref)
+
+    def frame_drift(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> np.ndarray:
+        """``J_dot v``: classical acceleration (``WORLD``) or spatial acceleration (``LOCAL``) at a = 0."""
+        if ref == WORLD:
+            return pin.getFrameClassicalAcceleration(self.model, self.data, frame, WORLD).vector
+        return pin.getFrameAcceleration(self.model, self.data, frame, ref).vector
+
+
+def homogeneous(placement: pin.SE3) -> np.ndarray:
+    """The 4 x 4 homogeneous matrix of a placement."""
+    return placement.homogeneous.copy()
+
+
+def load_model(model: Any) -> pin.Model:
+    """A Pinocchio model from an example-robot-data name (e.g. ``talos``) or a ``pin.Model``.
+
+    Models loaded by name are cached per process (loading TALOS takes ~0.8 s) and shared:
+    entities must not modify them.
+    """
+    if isinstance(model, pin.Model):
+        return model
+    return _load_named(str(model))
+
+
+@functools.lru_cache(maxsize=8)
+def _load_named(name: str) -> pin.Model:
+    import example_robot_data as erd
+
+    return erd.load(name).model

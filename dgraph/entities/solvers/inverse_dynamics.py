@@ -1,0 +1,148 @@
+"""InverseDynamicsSolver: the weighted whole-body inverse-dynamics QP as an entity."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.contacts.constraint import ContactConstraint
+from dgraph.entities.robot.robot_state import RobotState, load_model
+from dgraph.entities.solvers.inverse_dynamics_qp import SOLVED, InverseDynamicsQP, QPSolution
+from dgraph.entities.tasks.equation import TaskEquation
+
+
+@dg.register
+class InverseDynamicsSolver(dg.Entity):
+    """Torque control from weighted tasks and rigid contacts (thesis Eq. 4.14, "TSID torque").
+
+    Solves, every tick, for accelerations ``a`` and contact forces ``f``
+    (:mod:`~dgraph.entities.solvers.inverse_dynamics_qp`):
+    ``min sum_i w_i ||A_i a - b_i||^2 + sum_c w_c ||f_c||^2`` subject to the floating-base
+    dynamics, the contacts' motion constraints, friction pyramids, normal-force bounds and the
+    torque limits, then recovers ``tau = M_j a + h_j - (J_c^T T)_j f`` (Eq. 2.4).
+
+    When the QP fails (infeasible, iteration limit, non-finite data), ``status`` says why
+    (0 solved, 1 max iterations, 2 primal infeasible, 3 dual infeasible, 4 not finite,
+    5 other) and ``tau`` is the fallback ``g_j(q) - fallback_damping v_j``, clipped to the
+    torque limits: gravity compensation with joint damping, never an exception.
+
+    Parameters: ``model`` (sizes the ports; the same robot as the RobotModel), ``tasks`` and
+    ``contacts`` (names of the inputs to declare, usually the names of the task and contact
+    entities plugged into them), ``eps_abs`` (ProxQP absolute tolerance), ``max_iterations``,
+    ``acceleration_weight`` (regularisation ``eps ||a||^2``), ``fallback_damping``.
+    Inputs: ``robot`` (RobotModel state), one input per task (a Task's ``equation``), one per
+    contact (a Contact6d's ``contact``).
+    Outputs: ``solution`` (everything below, computed once), ``tau`` (actuated torques),
+    ``acceleration`` (nv), ``contact_wrenches`` (one row ``[force, torque]`` per contact,
+    world axes at the contact frame; zeros when inactive), ``normal_force_total`` (sum of the
+    world-z contact forces), ``status``, ``iterations``, ``solve_time`` (s).
+    """
+
+    model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the ports)")
+    tasks = dg.Param((), kind="str_list", doc="task input names")
+    contacts = dg.Param((), kind="str_list", doc="contact input names")
+    eps_abs = dg.Param(1e-9, kind="float", minimum=1e-12, maximum=1e-3, doc="ProxQP absolute tolerance")
+    max_iterations = dg.Param(1000, kind="int", minimum=1, doc="ProxQP iteration limit")
+    acceleration_weight = dg.Param(1e-6, kind="float", minimum=0.0, doc="regularisation of a")
+    fallback_damping = dg.Param(1.0, kind="float", minimum=0.0, doc="joint damping of the fallback torque")
+
+    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+
+    def configure(self) -> None:
+        """Size the outputs from the model and declare one input per task and per contact."""
+        model = load_model(self.model)
+        self.nv = model.nv
+        self.n_unactuated = model.joints[1].nv if model.njoints > 1 and model.joints[1].shortname() == \
+            "JointModelFreeFlyer" else 0
+        self.na = self.nv - self.n_unactuated
+        self.n_contacts = len(self.contacts)
+        self._qp = InverseDynamicsQP(self.nv, self.n_unactuated, model.effortLimit[self.n_unactuated:],
+                                     eps_abs=self.eps_abs, max_iterations=self.max_iterations,
+                                     acceleration_weight=self.acceleration_weight)
+        names = list(self.tasks) + list(self.contacts)
+        if len(set(names)) != len(names):
+            raise dg.ParamError(f"{self.name}: task and contact names must be unique: {names}", entity=self.name)
+        for name in names:
+            if not name.isidentifier() or hasattr(type(self), name):
+                raise dg.ParamError(f"{self.name}: {name!r} cannot name an input of the solver", entity=self.name)
+        for name in self.tasks:
+            self.declare(name, dg.Input(dtype="object", doc=f"equation of task {name}"))
+        for name in self.contacts:
+            self.declare(name, dg.Input(dtype="object", doc=f"constraint of contact {name}"))
+
+    def setup(self) -> None:
+        """Collect the task and contact inputs."""
+        self._task_inputs = [getattr(self, n) for n in self.tasks]
+        self._contact_inputs = [getattr(self, n) for n in self.contacts]
+
+    def _read(self, t: int) -> tuple[list[TaskEquation], list[ContactConstraint]]:
+        tasks = [inp(t) for inp in self._task_inputs]
+        contacts = [inp(t) for inp in self._contact_inputs]
+        for inp, value, kind in [(i, v, TaskEquation) for i, v in zip(self._task_inputs, tasks, strict=True)] + \
+                [(i, v, ContactConstraint) for i, v in zip(self._contact_inputs, contacts, strict=True)]:
+            if not isinstance(value, kind):
+                raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: expected a {kind.__name__}, got "
+                                   f"{type(value).__name__}", entity=self.name, signal=inp.name)
+            if kind is TaskEquation and value.matrix.shape[1] != self.nv:
+                raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: task matrix has {value.matrix.shape[1]} "
+                                   f"columns, the robot has nv = {self.nv}", entity=self.name, signal=inp.name)
+        return tasks, [c for c in contacts if c.active]
+
+    def fallback_torque(self, state: RobotState) -> np.ndarray:
+        """``g_j(q) - d v_j``, clipped to the torque limits."""
+        nu = self.n_unactuated
+        tau = state.gravity_torque()[nu:] - self.fallback_damping * state.v[nu:]
+        return np.clip(tau, -self._qp.effort_limit, self._qp.effort_limit)
+
+    @dg.output(dtype="object")
+    def solution(self, t: int) -> QPSolution:
+        """Solve the QP at ``t`` (or fall back)."""
+        state: RobotState = self.robot(t)
+        tasks, contacts = self._read(t)
+        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, contacts, None)
+        if solution.status != SOLVED:
+            solution.tau = self.fallback_torque(state)
+        return solution
+
+    @dg.output(shape=("na",), depends=("solution",))
+    def tau(self, t: int) -> np.ndarray:
+        """Actuated joint torques."""
+        return self.solution(t).tau
+
+    @dg.output(shape=("nv",), depends=("solution",))
+    def acceleration(self, t: int) -> np.ndarray:
+        """Generalized accelerations ``a`` (zeros after a failed solve)."""
+        return self.solution(t).acceleration
+
+    @dg.output(shape=("n_contacts", 6), depends=("solution",))
+    def contact_wrenches(self, t: int) -> np.ndarray:
+        """One ``[force, torque]`` row per declared contact (world axes; zeros if inactive)."""
+        solution = self.solution(t)
+        wrenches = np.zeros((self.n_contacts, 6))
+        by_name = {c.name: (c, f) for c, f in zip(solution.contacts, solution.forces, strict=True)}
+        for row, inp in enumerate(self._contact_inputs):
+            value = inp.value
+            if value is not None and value.name in by_name:
+                contact, forces = by_name[value.name]
+                wrenches[row] = contact.world_wrench(forces)
+        return wrenches
+
+    @dg.output(shape=(), depends=("contact_wrenches",))
+    def normal_force_total(self, t: int) -> float:
+        """Sum of the contacts' world-z forces (N)."""
+        return float(self.contact_wrenches(t)[:, 2].sum())
+
+    @dg.output(shape=(), dtype="int", depends=("solution",))
+    def status(self, t: int) -> int:
+        """0 when solved; see the class docstring for the failure codes."""
+        return self.solution(t).status
+
+    @dg.output(shape=(), dtype="int", depends=("solution",))
+    def iterations(self, t: int) -> int:
+        """ProxQP iterations."""
+        return self.solution(t).iterations
+
+    @dg.output(shape=(), depends=("solution",))
+    def solve_time(self, t: int) -> float:
+        """Wall time of assembly and solve (s)."""
+        return self.solution(t).solve_time

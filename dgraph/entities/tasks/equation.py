@@ -1,0 +1,28 @@
+"""TaskEquation: one weighted least-squares row block ``w * || A a - b ||^2`` of a QP."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, slots=True)
+class TaskEquation:
+    """``matrix`` ``A`` (m x nv), ``vector`` ``b`` (m), ``weight`` ``w`` (m, >= 0).
+
+    The solver minimises ``sum_i w_i (A a - b)_i^2`` over the accelerations ``a``.
+    """
+
+    matrix: np.ndarray
+    vector: np.ndarray
+    weight: np.ndarray
+
+    def residual(self, acceleration: np.ndarray) -> np.ndarray:
+        """``A a - b``."""
+        return self.matrix @ acceleration - self.vector
+
+    def cost(self, acceleration: np.ndarray) -> float:
+        """``sum_i w_i (A a - b)_i^2``."""
+        r = self.residual(acceleration)
+        return float(self.weight @ (r * r))

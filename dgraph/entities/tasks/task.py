@@ -1,0 +1,87 @@
+"""Task: an acceleration-level task ``J a = a* - J_dot v - Kp e - Kd e_dot`` with a weight."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.features.feature import FeatureValue
+from dgraph.entities.tasks.equation import TaskEquation
+
+
+def _broadcast(entity: dg.Entity, name: str, value: np.ndarray, size: int, t: int) -> np.ndarray:
+    """A scalar or a size-``size`` vector gain, as a vector (clear error otherwise)."""
+    value = np.asarray(value, dtype=float)
+    if value.ndim == 0:
+        return np.full(size, float(value))
+    if value.shape != (size,):
+        raise dg.SpecError(f"{entity.name}.{name} at tick {t}: expected a scalar or {size} values for a "
+                           f"{size}-row feature, got shape {value.shape}", entity=entity.name, signal=name)
+    return value
+
+
+@dg.register
+class Task(dg.Entity):
+    """A weighted acceleration task on a feature (thesis Eq. 4.7–4.8, TSID's task form).
+
+    With the feature's ``e = x (-) x*``, ``e_dot``, ``J``, ``J_dot v`` and ``x_ddot*``,
+    the desired task acceleration is the PD law
+
+    ``x_ddot_des = x_ddot* - Kp e - Kd e_dot``
+
+    and the task asks the solver for ``J a + J_dot v = x_ddot_des``, i.e. the row block
+    ``A = J``, ``b = x_ddot_des - J_dot v`` with cost ``weight * ||A a - b||^2``
+    (thesis Eq. 4.14's ``lambda_i ||O_i y - o_i||^2``). Thesis Eq. 4.8 writes the same law with
+    ``e = x* (-) x``; see ``docs/control.md``.
+
+    Parameters: ``critical_damping`` (when true, ``Kd = 2 sqrt(Kp)`` and there is no ``kd``
+    input).
+    Inputs: ``feature`` (a feature's ``feature`` output), ``kp``, ``kd`` (scalar or one gain
+    per row, >= 0), ``weight`` (scalar or per row, >= 0; default 1).
+    Outputs: ``equation`` (:class:`TaskEquation`, plugged into a solver),
+    ``desired_acceleration`` (``x_ddot_des``).
+    """
+
+    critical_damping = dg.Param(False, kind="bool", doc="use Kd = 2 sqrt(Kp) instead of a kd input")
+
+    feature = dg.Input(dtype="object", doc="the feature's value (error, rate, Jacobian, drift)")
+    kp = dg.Input(default=0.0, doc="proportional gain (scalar or per row)")
+    weight = dg.Input(default=1.0, doc="task weight (scalar or per row)")
+
+    def configure(self) -> None:
+        """Declare ``kd`` unless the damping is critical."""
+        if not self.critical_damping:
+            self.declare("kd", dg.Input(default=0.0, doc="derivative gain (scalar or per row)"))
+
+    def _gains(self, size: int, t: int) -> tuple[np.ndarray, np.ndarray]:
+        kp = _broadcast(self, "kp", self.kp(t), size, t)
+        if self.critical_damping:
+            kd = 2.0 * np.sqrt(np.maximum(kp, 0.0))
+        else:
+            kd = _broadcast(self, "kd", self.kd(t), size, t)
+        if (kp < 0).any() or (kd < 0).any():
+            raise dg.SpecError(f"{self.name}: gains must be >= 0 at tick {t}", entity=self.name, signal="kp")
+        return kp, kd
+
+    def _feature(self, t: int) -> FeatureValue:
+        value = self.feature(t)
+        if not isinstance(value, FeatureValue):
+            raise dg.SpecError(f"{self.name}.feature at tick {t}: expected a feature's output, got "
+                               f"{type(value).__name__}", entity=self.name, signal="feature")
+        return value
+
+    @dg.output(shape=None)
+    def desired_acceleration(self, t: int) -> np.ndarray:
+        """``x_ddot* - Kp e - Kd e_dot``."""
+        f = self._feature(t)
+        kp, kd = self._gains(len(f.error), t)
+        return f.reference_acceleration - kp * f.error - kd * f.error_velocity
+
+    @dg.output(dtype="object")
+    def equation(self, t: int) -> TaskEquation:
+        """``A = J``, ``b = x_ddot_des - J_dot v``, per-row weights."""
+        f = self._feature(t)
+        weight = _broadcast(self, "weight", self.weight(t), len(f.error), t)
+        if (weight < 0).any():
+            raise dg.SpecError(f"{self.name}.weight must be >= 0 at tick {t}", entity=self.name, signal="weight")
+        return TaskEquation(f.jacobian, self.desired_acceleration(t) - f.drift, weight)

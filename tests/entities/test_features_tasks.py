@@ -1,0 +1,146 @@
+"""Features and tasks: errors on SE(3), their rates by finite differences, the task law."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import dgraph as dg
+from dgraph.entities.features import AngularMomentum, CenterOfMass, FramePose, JointPosture
+from dgraph.entities.robot import RobotModel, load_model
+from dgraph.entities.tasks import Task
+
+EPS = 1e-6
+
+
+def robot_graph(q, v):
+    g = dg.Graph(dt=0.001)
+    robot = g.add(RobotModel("robot"))
+    robot.q.set(q)
+    robot.v.set(v)
+    return g, robot
+
+
+def random_state(seed):
+    model = load_model("talos")
+    rng = np.random.default_rng(seed)
+    q = model.referenceConfigurations["half_sitting"].copy()
+    q[:3] += rng.normal(scale=0.1, size=3)
+    q[3:7] = pin.Quaternion(pin.exp3(rng.normal(scale=0.3, size=3))).coeffs()
+    q[7:] += rng.normal(scale=0.2, size=32)
+    return model, q, rng.normal(size=model.nv)
+
+
+def feature_at(make, q, v, setup=lambda f: None):
+    g, _ = robot_graph(q, v)
+    feature = g.add(make())
+    g.plug("robot.state", f"{feature.name}.robot")
+    setup(feature)
+    return feature.feature(0)
+
+
+@pytest.mark.parametrize("mask", ["111111", "000111", "001000"])
+def test_frame_pose_error_rate_and_jacobian_by_finite_differences(mask):
+    model, q, v = random_state(0)
+    fid = model.getFrameId("arm_left_7_link")
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    placement = data.oMf[fid]
+
+    def setup(f):  # reference = current pose, moving with a constant twist (error rate = J v - ref velocity)
+        f.reference_position.set(placement.translation)
+        f.reference_orientation.set(pin.Quaternion(placement.rotation).coeffs())
+        f.reference_velocity.set(np.array([0.1, 0.0, -0.2, 0.0, 0.3, 0.0]))
+
+    make = lambda: FramePose("hand", frame="arm_left_7_link", mask=mask)  # noqa: E731
+    value = feature_at(make, q, v, setup)
+    rows = [i for i, c in enumerate(mask) if c == "1"]
+    assert value.error == pytest.approx(np.zeros(len(rows)), abs=1e-12)
+    error = lambda qq: feature_at(make, qq, v, setup).error  # noqa: E731
+    rate = (error(pin.integrate(model, q, EPS * v)) - error(pin.integrate(model, q, -EPS * v))) / (2 * EPS)
+    reference_velocity = np.array([0.1, 0.0, -0.2, 0.0, 0.3, 0.0])[rows]
+    assert np.allclose(rate, value.error_velocity + reference_velocity, atol=1e-6)
+    assert np.allclose(value.jacobian @ v - reference_velocity, value.error_velocity, atol=1e-12)
+
+
+def test_frame_pose_orientation_error_is_the_world_rotation_vector():
+    model, q, v = random_state(1)
+    data = model.createData()
+    fid = model.getFrameId("base_link")
+    pin.framesForwardKinematics(model, data, q)
+    rotation = data.oMf[fid].rotation
+    offset = np.array([0.1, -0.05, 0.2])  # reference = exp(-offset) R: error = offset
+    reference = pin.exp3(-offset) @ rotation
+    value = feature_at(lambda: FramePose("w", frame="base_link", mask="000111"), q, v,
+                       lambda f: f.reference_orientation.set(pin.Quaternion(reference).coeffs()))
+    assert np.allclose(value.error, offset, atol=1e-12)
+
+
+def test_com_posture_and_momentum_features():
+    model, q, v = random_state(2)
+    com = pin.centerOfMass(model, model.createData(), q)
+    value = feature_at(lambda: CenterOfMass("com", mask="011"), q, v,
+                       lambda f: f.reference_position.set(com + np.array([0.0, 0.01, -0.02])))
+    assert np.allclose(value.error, [-0.01, 0.02]) and value.jacobian.shape == (2, 38)
+    posture = feature_at(lambda: JointPosture("p"), q, v)
+    assert np.allclose(posture.error, q[7:] - model.referenceConfigurations["half_sitting"][7:])
+    assert np.allclose(posture.jacobian @ v, v[6:]) and np.allclose(posture.error_velocity, v[6:])
+    momentum = feature_at(lambda: AngularMomentum("am"), q, v)
+    data = model.createData()
+    pin.computeCentroidalMomentum(model, data, q, v)
+    assert np.allclose(momentum.error, data.hg.angular, atol=1e-10)
+
+
+def test_posture_on_a_subset_of_joints_and_errors():
+    _, q, v = random_state(3)
+    value = feature_at(lambda: JointPosture("p", joints=["torso_1_joint", "head_2_joint"]), q, v)
+    assert value.jacobian.shape == (2, 38) and value.jacobian[0, 6 + 12] == 1.0
+    with pytest.raises(dg.ParamError, match="not a one-dof joint"):
+        JointPosture("p", joints=["root_joint"])
+    with pytest.raises(dg.ParamError, match="no configuration"):
+        JointPosture("p", reference_configuration="standing_on_hands")
+    with pytest.raises(dg.ParamError, match="mask"):
+        FramePose("f", frame="base_link", mask="0000")
+
+
+def test_task_equation_is_the_pd_law_minus_the_drift():
+    _, q, v = random_state(4)
+    g, _ = robot_graph(q, v)
+    com = g.add(CenterOfMass("com"))
+    com.reference_position.set(np.zeros(3))
+    com.reference_velocity.set(np.array([0.1, 0.2, 0.3]))
+    com.reference_acceleration.set(np.array([1.0, -1.0, 0.5]))
+    task = g.add(Task("task"))
+    g.plug("robot.state", "com.robot")
+    g.plug("com.feature", "task.feature")
+    task.kp.set(np.array([10.0, 20.0, 30.0]))
+    task.kd.set(5.0)
+    task.weight.set(7.0)
+    f = com.feature(0)
+    equation = task.equation(0)
+    desired = f.reference_acceleration - np.array([10.0, 20.0, 30.0]) * f.error - 5.0 * f.error_velocity
+    assert np.allclose(task.desired_acceleration(0), desired)
+    assert np.allclose(equation.vector, desired - f.drift) and np.allclose(equation.weight, 7.0)
+    a = np.linalg.lstsq(f.jacobian, equation.vector, rcond=None)[0]  # the task met exactly: J a + drift = desired
+    assert np.allclose(f.jacobian @ a + f.drift, desired)
+    assert equation.cost(a) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_task_gain_errors_and_critical_damping():
+    _, q, v = random_state(5)
+    g, _ = robot_graph(q, v)
+    g.add(CenterOfMass("com")).reference_position.set(np.zeros(3))
+    task = g.add(Task("task", critical_damping=True))
+    g.plug("robot.state", "com.robot")
+    g.plug("com.feature", "task.feature")
+    assert "kd" not in task.inputs
+    task.kp.set(16.0)
+    f = g["com"].feature(0)
+    assert np.allclose(task.desired_acceleration(0), -16.0 * f.error - 8.0 * f.error_velocity)
+    task.kp.set(np.ones(4))
+    with pytest.raises(dg.DGraphError, match=r"task\.kp.*scalar or 3 values"):
+        task.equation(0)
+    task.kp.set(-1.0)
+    with pytest.raises(dg.DGraphError, match="gains must be >= 0"):
+        task.equation(0)

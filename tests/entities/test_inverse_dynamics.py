@@ -1,0 +1,153 @@
+"""InverseDynamicsSolver: exactness against daqp, dynamics, limits, contacts, failures."""
+
+from __future__ import annotations
+
+import daqp
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from dgraph.entities.solvers import InverseDynamicsQP
+from dgraph.entities.solvers.inverse_dynamics_qp import NOT_FINITE, PRIMAL_INFEASIBLE, SOLVED
+from tests.entities.talos_graph import CONTACTS, build, half_sitting
+
+
+def perturbed_state(seed):
+    rng = np.random.default_rng(seed)
+    q = half_sitting()
+    q[7:] += 0.05 * rng.normal(size=32)
+    return q, 0.2 * rng.normal(size=38)
+
+
+def dynamics_residual(graph, t=0):
+    """||M a + h - J_c^T f - S^T tau||_inf, with J_c^T f from the contacts' own data."""
+    solver, state = graph["solver"], graph["robot"].state(t)
+    solution = solver.solution(t)
+    generalized = sum(c.jacobian.T @ (c.force_generator @ f) for c, f in zip(solution.contacts, solution.forces))
+    torque = np.r_[np.zeros(6), solution.tau]
+    return np.abs(state.mass_matrix @ solution.acceleration + state.bias_forces - generalized - torque).max()
+
+
+def exact_solution(workspace):
+    """The same QP solved by daqp (dual active set, exact to machine precision)."""
+    ws = workspace
+    n_eq = len(ws.b)
+    A = np.vstack([ws.A, ws.C])
+    upper = np.r_[ws.b, ws.upper]
+    lower = np.r_[ws.b, ws.lower]
+    sense = np.r_[np.full(n_eq, 5), np.zeros(len(ws.upper))].astype(np.int32)  # 5: equality
+    x, _, exitflag, _ = daqp.solve(ws.H, ws.g, A, upper, lower, sense)
+    assert exitflag == 1
+    return x
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_solution_matches_an_exact_solver_and_satisfies_the_dynamics(seed):
+    q, v = perturbed_state(seed)
+    graph = build(q, v)
+    solver = graph["solver"]
+    solution = solver.solution(0)
+    assert solution.status == SOLVED
+    workspace = next(iter(solver._qp._workspaces.values()))
+    x = exact_solution(workspace)
+    assert np.abs(np.r_[solution.acceleration, np.concatenate(solution.forces)] - x).max() < 1e-4
+    assert dynamics_residual(graph) < 1e-6
+
+
+def test_standing_still_forces_carry_the_weight_and_the_cop_is_inside_the_soles():
+    graph = build()
+    solver = graph["solver"]
+    weight = graph["robot"].state(0).total_mass * 9.81
+    assert solver.normal_force_total(0) == pytest.approx(weight, rel=1e-4)
+    for contact, forces in zip(solver.solution(0).contacts, solver.solution(0).forces):
+        corners = forces.reshape(4, 3)
+        assert (corners[:, 2] >= -1e-6).all()  # unilateral corners: CoP inside the sole
+        assert (np.abs(corners[:, :2]) <= 0.3 / np.sqrt(2) * corners[:, 2:3] + 1e-6).all()
+    assert np.abs(solver.acceleration(0)).max() < 0.1  # holding still: small accelerations
+
+
+def test_torque_limits_hold_when_a_task_asks_for_more():
+    graph = build()
+    graph["posture_task"].kp.set(1e4)  # the unconstrained torques would exceed the limits
+    reference = half_sitting()[7:] + 0.5
+    graph["posture"].reference.set(reference)
+    solver = graph["solver"]
+    limits = graph["robot"].pin_model.effortLimit[6:]
+    assert solver.status(0) == SOLVED
+    assert (np.abs(solver.tau(0)) <= limits + 1e-5).all()
+    assert (np.abs(solver.tau(0)) >= limits - 1e-3).any()  # some limit is active
+    assert dynamics_residual(graph) < 1e-6
+
+
+def test_contact_removed_at_run_time_drops_its_forces():
+    graph = build()
+    solver = graph["solver"]
+    graph["left_foot"].deactivate()
+    wrenches = solver.contact_wrenches(0)
+    assert np.allclose(wrenches[0], 0.0) and wrenches[1, 2] > 0
+    assert solver.status(0) == SOLVED
+    graph["left_foot"].activate()
+    assert solver.contact_wrenches(0)[0, 2] > 100
+
+
+def test_anchor_is_taken_at_the_first_tick_and_released_when_inactive():
+    graph = build()
+    foot = graph["left_foot"]
+    graph.step()
+    anchor = foot.anchor(1)
+    placement = graph["robot"].left_sole_link_placement(0)
+    assert np.allclose(anchor.homogeneous, placement)
+    foot.deactivate()
+    graph.step()
+    assert foot.anchor(2) is None
+    assert foot.error(2) == pytest.approx(np.zeros(6))
+
+
+def test_infeasible_problem_gives_a_status_and_the_fallback_torque():
+    graph = build()
+    state = graph["robot"].state(0)
+    qp = InverseDynamicsQP(38, 6, graph["robot"].pin_model.effortLimit[6:])
+    contact = graph["left_foot"].contact(0)
+    impossible = type(contact)(**{**{f: getattr(contact, f) for f in contact.__dataclass_fields__},
+                                  "friction_lower": np.r_[contact.friction_lower[:-1], 500.0],
+                                  "friction_upper": np.r_[contact.friction_upper[:-1], 100.0]})
+    fallback = graph["solver"].fallback_torque(state)
+    solution = qp.solve(state.mass_matrix, state.bias_forces, [graph["com_task"].equation(0)], [impossible], fallback)
+    assert solution.status == PRIMAL_INFEASIBLE
+    assert solution.tau is fallback
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered")
+def test_non_finite_task_data_falls_back_to_gravity_compensation():
+    q, v = perturbed_state(7)
+    graph = build(q, v)
+    graph.check_values = False
+    graph["com"].reference_position.set(np.zeros(3))
+    graph["com_task"].kp.set(np.array([np.inf, 0.0, 0.0]))
+    solver = graph["solver"]
+    assert solver.status(0) == NOT_FINITE
+    model = graph["robot"].pin_model
+    gravity = pin.computeGeneralizedGravity(model, model.createData(), q)[6:]
+    expected = np.clip(gravity - 1.0 * v[6:], -model.effortLimit[6:], model.effortLimit[6:])
+    assert np.allclose(solver.tau(0), expected)
+    graph["com_task"].kp.set(20.0)  # recovers at once (no warm start from the failure)
+    assert solver.status(0) == SOLVED
+
+
+def test_the_shared_robot_pass_runs_once_per_tick():
+    graph = build()
+    for _ in range(5):
+        graph["robot"].q.set(graph["robot"].q(graph.t) + 1e-4)
+        graph["solver"].tau(graph.t)
+        graph["solver"].contact_wrenches(graph.t)
+    assert graph["robot"].state.count == 5
+    assert graph["solver"].solution.count == 5
+
+
+def test_wrong_inputs_are_named():
+    graph = build()
+    graph.unplug("solver.com_task")
+    graph["solver"].com_task.set(np.zeros(3))
+    with pytest.raises(Exception, match=r"solver\.com_task.*expected a TaskEquation"):
+        graph["solver"].tau(0)
+    assert len(CONTACTS) == 2

@@ -1,0 +1,123 @@
+"""RobotModel and RobotState: dynamics terms, and every Jacobian and drift by finite differences."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import dgraph as dg
+from dgraph.entities.robot import RobotModel, RobotState, load_model
+from dgraph.entities.robot.robot_state import LOCAL, WORLD
+
+EPS = 1e-6
+
+
+@pytest.fixture(scope="module")
+def model():
+    return load_model("talos")
+
+
+def random_state(model, seed):
+    rng = np.random.default_rng(seed)
+    q = pin.randomConfiguration(model, np.r_[-np.ones(3), model.lowerPositionLimit[3:]],
+                                np.r_[np.ones(3), model.upperPositionLimit[3:]])
+    return q, rng.normal(size=model.nv)
+
+
+def state_at(model, q, v):
+    return RobotState(model, model.createData(), q, v)
+
+
+def central(f, model, q, direction):
+    """(f(q + eps d) - f(q - eps d)) / 2 eps on the configuration manifold."""
+    return (f(pin.integrate(model, q, EPS * direction)) - f(pin.integrate(model, q, -EPS * direction))) / (2 * EPS)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_mass_matrix_and_bias_forces_match_pinocchio(model, seed):
+    q, v = random_state(model, seed)
+    state = state_at(model, q, v)
+    data = model.createData()
+    pin.crba(model, data, q)
+    upper = np.triu(data.M)
+    assert np.allclose(state.mass_matrix, upper + np.triu(upper, 1).T, atol=1e-10)
+    assert np.allclose(state.bias_forces, pin.rnea(model, data, q, v, np.zeros(model.nv)), atol=1e-9)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.parametrize("frame", ["left_sole_link", "arm_right_7_link"])
+def test_world_frame_jacobian_and_drift_by_finite_differences(model, seed, frame):
+    q, v = random_state(model, seed)
+    state = state_at(model, q, v)
+    fid = model.getFrameId(frame)
+    jacobian = state.frame_jacobian(fid, WORLD)
+    reference = state.frame_placement(fid)
+
+    def pose_vector(qq):  # translation and rotation vector relative to the reference rotation
+        placement = state_at(model, qq, v).frame_placement(fid)
+        return np.concatenate([placement.translation, pin.log3(placement.rotation @ reference.rotation.T)])
+
+    for i in range(0, model.nv, 5):
+        e = np.zeros(model.nv)
+        e[i] = 1.0
+        assert np.allclose(central(pose_vector, model, q, e), jacobian[:, i], atol=1e-6), i
+    velocity = lambda qq: state_at(model, qq, v).frame_jacobian(fid, WORLD) @ v  # noqa: E731
+    assert np.allclose(central(velocity, model, q, v), state.frame_drift(fid, WORLD), atol=1e-5)
+    assert np.allclose(state.frame_velocity(fid, WORLD), jacobian @ v, atol=1e-12)
+
+
+def test_local_frame_jacobian_and_drift_by_finite_differences(model):
+    q, v = random_state(model, 3)
+    state = state_at(model, q, v)
+    fid = model.getFrameId("right_sole_link")
+    jacobian = state.frame_jacobian(fid, LOCAL)
+    placement = state.frame_placement(fid)
+    twist = lambda qq: pin.log6(placement.actInv(state_at(model, qq, v).frame_placement(fid))).vector  # noqa: E731
+    for i in range(0, model.nv, 4):
+        e = np.zeros(model.nv)
+        e[i] = 1.0
+        assert np.allclose(central(twist, model, q, e), jacobian[:, i], atol=1e-6), i
+    body_twist = lambda qq: state_at(model, qq, v).frame_jacobian(fid, LOCAL) @ v  # noqa: E731
+    assert np.allclose(central(body_twist, model, q, v), state.frame_drift(fid, LOCAL), atol=1e-5)
+
+
+def test_com_and_centroidal_terms_by_finite_differences(model):
+    q, v = random_state(model, 4)
+    state = state_at(model, q, v)
+    com = lambda qq: state_at(model, qq, v).com_position  # noqa: E731
+    for i in range(0, model.nv, 3):
+        e = np.zeros(model.nv)
+        e[i] = 1.0
+        assert np.allclose(central(com, model, q, e), state.com_jacobian[:, i], atol=1e-7), i
+    assert np.allclose(state.com_velocity, state.com_jacobian @ v, atol=1e-12)
+    com_velocity = lambda qq: state_at(model, qq, v).com_jacobian @ v  # noqa: E731
+    assert np.allclose(central(com_velocity, model, q, v), state.com_drift, atol=1e-5)
+    momentum = lambda qq: state_at(model, qq, v).centroidal_momentum_matrix @ v  # noqa: E731
+    assert np.allclose(central(momentum, model, q, v), state.centroidal_drift, atol=1e-4)
+    # linear momentum is m * com velocity
+    assert np.allclose(state.centroidal_momentum[:3], state.total_mass * state.com_velocity, atol=1e-9)
+
+
+def test_entity_outputs_share_one_pass_per_tick(model):
+    g = dg.Graph(dt=0.001)
+    robot = g.add(RobotModel("robot", frames=["left_sole_link", "right_sole_link"]))
+    q, v = random_state(model, 5)
+    robot.q.set(q)
+    robot.v.set(v)
+    for name in ("mass_matrix", "bias_forces", "com_position", "com_jacobian", "centroidal_drift",
+                 "left_sole_link_jacobian", "right_sole_link_placement", "right_sole_link_drift"):
+        robot.signal(name)(0)
+    assert robot.state.count == 1
+    assert robot.left_sole_link_placement(0).shape == (4, 4)
+    assert np.allclose(robot.com_position(0), pin.centerOfMass(model, model.createData(), q))
+    robot.q.set(pin.neutral(model))
+    robot.com_position(0)
+    assert robot.state.count == 2
+
+
+def test_bad_frame_and_model_are_clear_errors():
+    with pytest.raises(dg.ParamError, match="no frame 'nope'"):
+        RobotModel("robot", frames=["nope"])
+    with pytest.raises(dg.ParamError, match="cannot load robot model"):
+        RobotModel("robot", model="no_such_robot")
