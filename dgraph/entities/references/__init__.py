@@ -1,5 +1,7 @@
-"""Reference generators: signals that are functions of time."""
+"""Reference generators: signals that are functions of time (constants: ``operators.Constant``)."""
 
+from dgraph.entities.references.minimum_jerk import MinimumJerk
 from dgraph.entities.references.sinusoid import Sinusoid
+from dgraph.entities.references.trajectory_file import TrajectoryFile
 
-__all__ = ["Sinusoid"]
+__all__ = ["MinimumJerk", "Sinusoid", "TrajectoryFile"]
