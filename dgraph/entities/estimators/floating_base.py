@@ -79,8 +79,9 @@ class FloatingBaseEstimator(dg.Entity):
     7. Outputs (Pinocchio conventions): ``q = [p_WB, quat_xyzw(R_WB), q_j]``,
        ``v = [R_WB^T v_WB, w_B, qd_j]``.
 
-    Tick transition (``prepare_state`` at ``t`` stages, ``commit_state`` publishes at ``t + 1``):
-    ``a_k(t + 1) = c_k(t)``, ``p_k(t + 1) = p_k`` (the anchor used at ``t``),
+    Tick transition (``prepare_state`` at ``t`` stages, ``commit_state`` publishes at ``t + 1``;
+    flags and anchors only when they change):
+    ``a_k(t + 1) = c_k(t)``, ``p_k(t + 1) = p_k`` (the anchor used at ``t``; kept when off),
     ``x(t + 1)`` as above, ``i(t + 1) = i(t) or any c_k(t)``, ``p~(t + 1) = p_WB(t) + dt v_WB(t)``
     (dead reckoning when no foot is on the ground). Initial state: no anchor, ``i`` false,
     ``x = 0`` (used only if no foot touches at tick 0: the robot then starts at rest),
@@ -160,6 +161,7 @@ class FloatingBaseEstimator(dg.Entity):
         self._ft_in = (self.ft_left_ankle, self.ft_right_ankle)
         self._anchor = (self.anchor_left, self.anchor_right)
         self._anchored = (self.anchored_left, self.anchored_right)
+        self._pending: list[dg.State] = []
 
     def reset(self) -> None:
         """No anchor, IMU at rest, base at ``q0[:3]``."""
@@ -170,6 +172,7 @@ class FloatingBaseEstimator(dg.Entity):
         self.velocity_prediction.set(np.zeros(3), 0)
         self.velocity_initialised.set(False, 0)
         self.position_prediction.set(np.array(q0[:3], dtype=float), 0)
+        self._pending = []
 
     # -- the estimate -----------------------------------------------------------------------
     @dg.output(dtype="object", depends=(
@@ -257,21 +260,32 @@ class FloatingBaseEstimator(dg.Entity):
 
     # -- tick transition ----------------------------------------------------------------------
     def prepare_state(self, t: int) -> None:
-        """Stage the contact flags, anchors and filter states computed from the values at ``t``."""
+        """Stage the filter states, and the contact flags and anchors that change, from the values at ``t``.
+
+        A flag or an anchor is staged (and committed) only when its value changes (touch-down,
+        lift-off): its ``time`` is then the tick of the change, and a steady stance costs two
+        states per tick, not seven.
+        """
         est = self.estimate(t)
-        for k in range(2):
-            self._anchored[k].stage(est.contacts[k])
-            anchor = est.anchors[k]
-            self._anchor[k].stage(anchor if anchor is not None else self._anchor[k](t))
+        pending = [self.velocity_prediction, self.position_prediction]
         self.velocity_prediction.stage(est.next_velocity)
-        self.velocity_initialised.stage(bool(self.velocity_initialised(t)) or any(est.contacts))
         self.position_prediction.stage(est.next_position)
+        for k in range(2):
+            if est.contacts[k] != self._anchored[k](t):
+                self._anchored[k].stage(est.contacts[k])
+                pending.append(self._anchored[k])
+                if est.contacts[k]:
+                    self._anchor[k].stage(est.anchors[k])
+                    pending.append(self._anchor[k])
+        if any(est.contacts) and not self.velocity_initialised(t):
+            self.velocity_initialised.stage(True)
+            pending.append(self.velocity_initialised)
+        self._pending = pending
 
     def commit_state(self, t_next: int) -> None:
         """Publish the staged states at ``t + 1``."""
-        for state in (*self._anchor, *self._anchored, self.velocity_prediction, self.velocity_initialised,
-                      self.position_prediction):
+        for state in self._pending:
             state.commit(t_next)
-
+        self._pending = []
 
 __all__ = ["Estimate", "FloatingBaseEstimator"]

@@ -215,3 +215,17 @@ def test_quaternion_helpers_round_trip(rng):
         assert np.allclose(r, pin.Quaternion(quat).toRotationMatrix())
         back = matrix_to_quat(r)
         assert np.allclose(back, quat if quat[3] >= 0 else -quat)
+
+
+def test_graph_file_builds_and_saves_the_estimator(tmp_path, sway):
+    path = tmp_path / "estimator.yaml"
+    path.write_text(
+        "name: estimator\ndt: 0.001\nentities:\n"
+        "  est: {type: FloatingBaseEstimator, params: {model: talos, cutoff_frequency: 2.0,\n"
+        "        foot_frames: [left_sole_link, right_sole_link], contact_force_on: 120.0}}\n"
+        "  truth: {type: GroundTruthEstimator}\n")
+    g = dg.load(str(path))
+    est = g["est"]
+    assert est.cutoff_frequency == 2.0 and est.contact_force_on == 120.0
+    dg.save(g, str(tmp_path / "again.yaml"))
+    assert dg.load(str(tmp_path / "again.yaml"))["est"].params == est.params
