@@ -1,1 +1,370 @@
-"""The MuJoCo device entity."""
+"""The MuJoCo device entity: a TALOS (or another robot of :mod:`sim.robots`) simulated by MuJoCo.
+
+One tick ``t -> t + 1`` (``prepare_state(t)``): read ``control(t)`` (and the wrench inputs),
+compute the joint torques, save the MuJoCo integration state (``mj_getState``), finish the step
+with ``mj_step2`` (actuation, acceleration, contacts, acceleration-stage sensors, integration),
+then ``mj_step1`` at the new state (kinematics, position/velocity sensors), check for divergence
+and stage every state. ``commit_state(t + 1)`` publishes them and cannot fail. Calling
+``mj_step2`` then ``mj_step1`` is the same sequence of computations as ``mj_step`` (split at a
+different place), so positions, velocities, gyro and orientation at ``t + 1`` are those of the
+new state without an extra ``mj_forward``.
+
+If a tick fails after MuJoCo stepped (another entity raised before the commit, or this device
+detected a fall or a divergence), the next ``prepare_state`` restores the saved state first, so a
+resumed run is identical to an uninterrupted one.
+
+All states use Pinocchio's conventions (see :mod:`sim.conventions`). Acceleration-stage
+quantities (``imu_linear_acceleration``, the force/torque sensors, ``joint_torque``,
+``contact_force_total``) stamped ``t + 1`` are those of the step ``t -> t + 1`` (computed at ``t``
+with ``control(t)``, as a sensor sampled at the end of the period would see them); at tick 0 they
+come from ``mj_forward`` with zero torque.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import mujoco
+import numpy as np
+
+import dgraph as dg
+from sim.model import SimModel, load
+from sim.robots import ROBOTS
+from sim.scenes import SCENES
+
+_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+_BAD_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+                 mujoco.mjtWarning.mjWARN_BADQACC)
+FT_SENSORS = ("left_ankle", "right_ankle", "left_wrist", "right_wrist")
+
+
+def _na(entity: MujocoDevice) -> tuple[int]:
+    return (entity.na,)
+
+
+def _port_name(body: str) -> str:
+    """``wrench_<body>`` with every character that is not a letter, digit or ``_`` replaced by ``_``."""
+    return "wrench_" + "".join(c if c.isalnum() or c == "_" else "_" for c in body)
+
+
+@dg.register
+class MujocoDevice(dg.Device):
+    """A robot simulated by MuJoCo (TALOS built from the example-robot-data URDF), 1 tick = 1 step.
+
+    Control modes: ``torque`` (``control`` = joint torques) or ``position`` (``control`` = joint
+    position targets q*, ``tau = feedforward_torque + kp (q* - q) + kd (velocity_reference - v)``).
+    Torques are clipped to the URDF effort limits; ``joint_torque`` reports what was applied.
+    Vectors of actuated joints are in Pinocchio's order of ``q[7:]`` / ``v[6:]``.
+
+    Force/torque sensors (6: force then torque, N and N m, in the sensor frame, torque about the
+    sensor origin) report the wrench that the child side (foot or hand) exerts on the parent side
+    (leg or arm): standing still, an ankle force along the sole normal is about +(weight carried
+    by that foot minus the foot's own weight). Sensor frames are Pinocchio frames:
+    ``leg_left_6_joint``, ``leg_right_6_joint``, ``wrist_left_ft_link``, ``wrist_right_ft_link``;
+    the IMU is at ``imu_link`` (on ``torso_2_link``).
+    """
+
+    model = dg.Param("talos", kind="str", choices=tuple(ROBOTS), doc="robot (sim.robots)")
+    scene = dg.Param("flat", kind="str", choices=tuple(SCENES), doc="scene (sim.scenes)")
+    collisions = dg.Param("all", kind="str", choices=("feet", "all"),
+                          doc="robot geoms touching the scene: every collision mesh (never each other), or soles only")
+    control_mode = dg.Param("torque", kind="str", choices=("torque", "position"), doc="what control commands")
+    kp = dg.Param(3000.0, kind="vector", doc="position mode stiffness, N m/rad (scalar or one per joint)")
+    kd = dg.Param(60.0, kind="vector", doc="position mode damping, N m s/rad (scalar or one per joint)")
+    q0 = dg.Param(None, kind="vector", doc="initial configuration, nq (default: half-sitting on the floor)")
+    v0 = dg.Param(None, kind="vector", doc="initial velocity, nv (default: zeros)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, maximum=1.0, doc="time step in s (default: the graph's dt)")
+    wrench_bodies = dg.Param([], kind="str_list", doc="bodies getting a wrench_<body> input (world frame, at CoM)")
+    fall_height = dg.Param(0.6, kind="float", doc="base height (m) under which fallen is true")
+    stop_on_fall = dg.Param(False, kind="bool", doc="raise a DGraphError when the robot falls")
+    video_path = dg.Param(None, kind="str", doc="record a video (.gif, .webp or .png) written at close")
+    video_fps = dg.Param(25.0, kind="float", minimum=0.1, maximum=1000.0, doc="video frame rate")
+    video_size = dg.Param([320, 240], kind="int_list", doc="video width and height in pixels")
+
+    control = dg.Input(shape=_na, doc="joint torques (torque mode) or position targets (position mode)")
+    # declared per instance (their zero default is sized by the robot): feedforward_torque (na,
+    # added torque in position mode), velocity_reference (na, joint velocity reference in position
+    # mode), and wrench_<body> (6) for each of wrench_bodies
+
+    q = dg.State(shape=("nq",), doc="configuration (Pinocchio: base position, quaternion xyzw, joints)")
+    v = dg.State(shape=("nv",), doc="velocity (Pinocchio: base linear and angular in the base frame, joints)")
+    imu_orientation = dg.State(shape=(4,), doc="IMU frame orientation in the world, quaternion xyzw")
+    imu_angular_velocity = dg.State(shape=(3,), doc="IMU angular velocity in the IMU frame, rad/s")
+    imu_linear_acceleration = dg.State(shape=(3,), doc="IMU proper acceleration (a - g) in the IMU frame, m/s²")
+    encoder_position = dg.State(shape=_na, doc="actuated joint positions, rad")
+    encoder_velocity = dg.State(shape=_na, doc="actuated joint velocities, rad/s")
+    ft_left_ankle = dg.State(shape=(6,), doc="left ankle wrench (foot on leg), sensor frame")
+    ft_right_ankle = dg.State(shape=(6,), doc="right ankle wrench (foot on leg), sensor frame")
+    ft_left_wrist = dg.State(shape=(6,), doc="left wrist wrench (hand on arm), sensor frame")
+    ft_right_wrist = dg.State(shape=(6,), doc="right wrist wrench (hand on arm), sensor frame")
+    joint_torque = dg.State(shape=_na, doc="applied joint torques after clipping, N m")
+    contact_force_total = dg.State(shape=(3,), doc="sum of the contact forces the scene exerts on the robot, world")
+    sim_time = dg.State(shape=(), doc="MuJoCo time, s")
+    fallen = dg.State(shape=(), dtype="bool", doc="base height below fall_height")
+
+    # -- construction -----------------------------------------------------------------------
+    def configure(self) -> None:
+        """Load the model (cached per process), size the ports, declare the wrench inputs."""
+        self.sim: SimModel = load(self.model, self.scene, 0.001, self.collisions)
+        self.mj_model = copy.copy(self.sim.mj_model)  # own copy: the time step follows dt
+        # software (llvmpipe) rendering: multisampling costs 4-6x (0.6 s -> 0.1 s at 320x240)
+        self.mj_model.vis.quality.offsamples = 0
+        self.mj_model.vis.quality.shadowsize = 2048
+        self.joint_map = self.sim.joint_map
+        self.nq, self.nv, self.na = self.joint_map.nq, self.joint_map.nv, self.joint_map.na
+        self._gains = {}
+        for name in ("kp", "kd"):
+            gain = np.asarray(getattr(self, name), dtype=float)
+            if gain.shape not in ((), (self.na,)) or not np.isfinite(gain).all():
+                raise dg.ParamError(f"{self.name}: parameter {name!r} must be a finite scalar or {self.na} values",
+                                    entity=self.name)
+            self._gains[name] = np.broadcast_to(gain, (self.na,)).copy()
+        if len(self.video_size) != 2 or min(self.video_size) < 8 or max(self.video_size) > 4096:
+            raise dg.ParamError(f"{self.name}: video_size must be [width, height] in 8..4096", entity=self.name)
+        self.declare("feedforward_torque", dg.Input(shape=(self.na,), default=np.zeros(self.na),
+                                                    doc="added joint torque in position mode, N m"))
+        self.declare("velocity_reference", dg.Input(shape=(self.na,), default=np.zeros(self.na),
+                                                    doc="joint velocity reference in position mode, rad/s"))
+        self._wrenches: list[tuple[int, str]] = []
+        for body in self.wrench_bodies:
+            body_id = mujoco.mj_name2id(self.mj_model, mujoco.mjtObj.mjOBJ_BODY, body)
+            if body_id < 0:
+                known = ", ".join(self.mj_model.body(b).name for b in range(1, self.mj_model.nbody))
+                raise dg.ParamError(f"{self.name}: wrench body {body!r} is not in the model; bodies: {known}",
+                                    entity=self.name)
+            port = _port_name(body)
+            if any(port == p for _, p in self._wrenches):
+                raise dg.ParamError(f"{self.name}: two wrench bodies map to the input {port!r}", entity=self.name)
+            self.declare(port, dg.Input(shape=(6,), default=np.zeros(6),
+                                        doc=f"world-frame [force, torque] applied at the CoM of {body}"))
+            self._wrenches.append((body_id, port))
+
+    def setup(self) -> None:
+        """MuJoCo data, buffers and the video hook."""
+        m = self.mj_model
+        self.data = mujoco.MjData(m)
+        self._saved = np.zeros(mujoco.mj_stateSize(m, _STATE))
+        self._pending = False
+        self._warnings = [self.data.warning[int(w)] for w in _BAD_WARNINGS]
+        self._warning_counts = [0, 0, 0]
+        jm = self.joint_map
+        self._qpos_joints, self._qvel_joints = jm.qpos_joints, jm.qvel_joints
+        self._ctrl_index, self._actuated_index = jm.ctrl_index, jm.actuated_index
+        self._lower = -m.actuator_ctrlrange[self._actuated_index, 1]
+        self._upper = m.actuator_ctrlrange[self._actuated_index, 1]
+        sensors = self.sim.sensors
+        # force then torque of each F/T sensor, in FT_SENSORS order: one block of sensordata
+        self._ft_states = [getattr(self, f"ft_{k}") for k in FT_SENSORS]
+        start = sensors.force[FT_SENSORS[0]]
+        expected = [start + 6 * i + o for i in range(len(FT_SENSORS)) for o in (0, 3)]
+        if [a for k in FT_SENSORS for a in (sensors.force[k], sensors.torque[k])] != expected:
+            raise dg.DGraphError(f"{self.name}: force/torque sensors are not laid out as expected", entity=self.name)
+        self._ft_block = slice(start, start + 6 * len(FT_SENSORS))
+        self._imu_quat = [sensors.imu_quat + i for i in (1, 2, 3, 0)]
+        self._imu_gyro = slice(sensors.imu_gyro, sensors.imu_gyro + 3)
+        self._imu_acc = slice(sensors.imu_accelerometer, sensors.imu_accelerometer + 3)
+        self._base_z = int(self.joint_map.qpos_index[2])
+        bodies = self.sim.robot_bodies  # a slice: these are views on the MjData buffers
+        self._cfrc_robot = self.data.cfrc_ext[bodies, 3:]
+        self._xfrc_robot = self.data.xfrc_applied[bodies, :3]
+        self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
+        self._frames: list[np.ndarray] = []
+        self._next_frame = 0
+        if self.video_path is not None:
+            self.after.add(self._record_frame)
+
+    def reset(self) -> None:
+        """Put MuJoCo at ``q0``, ``v0`` (``mj_forward``) and the states at tick 0."""
+        jm = self.joint_map
+        q0 = self.sim.q0 if self.q0 is None else np.asarray(self.q0, dtype=float)
+        v0 = np.zeros(self.nv) if self.v0 is None else np.asarray(self.v0, dtype=float)
+        if q0.shape != (self.nq,) or v0.shape != (self.nv,) or not (np.isfinite(q0).all() and np.isfinite(v0).all()):
+            raise dg.ParamError(f"{self.name}: q0 needs {self.nq} and v0 {self.nv} finite values", entity=self.name)
+        if not 0.5 < np.linalg.norm(q0[3:7]) < 2.0:
+            raise dg.ParamError(f"{self.name}: q0[3:7] must be a quaternion (x, y, z, w)", entity=self.name)
+        q0 = q0.copy()
+        q0[3:7] /= np.linalg.norm(q0[3:7])
+        m, d = self.mj_model, self.data
+        mujoco.mj_resetData(m, d)
+        jm.qpos_from_q(q0, d.qpos)
+        jm.qvel_from_v(q0, v0, d.qvel)
+        mujoco.mj_forward(m, d)
+        self._pending = False
+        self._sync_warnings()
+        self._stage_all(self._contact_force())
+        for sig in self._states():
+            sig.commit(0)
+
+    def _states(self) -> list[dg.State]:
+        return [s for s in self.ports.values() if isinstance(s, dg.State)]
+
+    # -- the tick ---------------------------------------------------------------------------
+    def _torque(self, t: int) -> np.ndarray:
+        """Joint torques (actuated order) from the inputs at ``t``, before clipping."""
+        u = self.control(t)
+        if self.control_mode == "torque":
+            tau = u
+        else:
+            d = self.data
+            tau = (self.feedforward_torque(t) + self._gains["kp"] * (u - d.qpos[self._qpos_joints])
+                   + self._gains["kd"] * (self.velocity_reference(t) - d.qvel[self._qvel_joints]))
+        if not np.isfinite(tau).all():
+            raise dg.DGraphError(f"{self.name}: non-finite joint torque at tick {t} (control_mode "
+                                 f"{self.control_mode}): {tau}", entity=self.name, signal="control")
+        return tau
+
+    def prepare_state(self, t: int) -> None:
+        """Apply the control at ``t``, step MuJoCo, check it, stage the state at ``t + 1``."""
+        m, d = self.mj_model, self.data
+        if self._pending:
+            self._restore()
+        dt = self.dt
+        if m.opt.timestep != dt:
+            m.opt.timestep = dt
+        tau = self._torque(t)
+        wrenches = [(body, self.signal(port)(t)) for body, port in self._wrenches]
+        for (_, port), (_, wrench) in zip(self._wrenches, wrenches, strict=True):
+            if not np.isfinite(wrench).all():
+                raise dg.DGraphError(f"{self.name}: non-finite {port} at tick {t}", entity=self.name, signal=port)
+        mujoco.mj_getState(m, d, self._saved, _STATE)
+        self._pending = True
+        d.ctrl[:] = tau[self._ctrl_index]
+        for body, wrench in wrenches:
+            d.xfrc_applied[body] = wrench
+        mujoco.mj_step2(m, d)
+        contact_force = self._contact_force()  # contact forces of this step: read before mj_step1
+        mujoco.mj_step1(m, d)
+        self._check(t)
+        fallen = self._stage_all(contact_force)
+        if self.stop_on_fall and fallen:
+            raise dg.DGraphError(f"{self.name}: the robot fell during tick {t} (base height "
+                                 f"{d.qpos[self._base_z]:.3f} m < fall_height {self.fall_height} m "
+                                 f"at tick {t + 1})", entity=self.name, signal="fallen")
+
+    def commit_state(self, t_next: int) -> None:
+        """Publish the staged state at ``t + 1``."""
+        self.q.commit(t_next)
+        self.v.commit(t_next)
+        self.imu_orientation.commit(t_next)
+        self.imu_angular_velocity.commit(t_next)
+        self.imu_linear_acceleration.commit(t_next)
+        self.encoder_position.commit(t_next)
+        self.encoder_velocity.commit(t_next)
+        self.ft_left_ankle.commit(t_next)
+        self.ft_right_ankle.commit(t_next)
+        self.ft_left_wrist.commit(t_next)
+        self.ft_right_wrist.commit(t_next)
+        self.joint_torque.commit(t_next)
+        self.contact_force_total.commit(t_next)
+        self.sim_time.commit(t_next)
+        self.fallen.commit(t_next)
+        self._pending = False
+
+    def _restore(self) -> None:
+        """Back to the state saved before the last uncommitted step."""
+        m, d = self.mj_model, self.data
+        mujoco.mj_setState(m, d, self._saved, _STATE)
+        mujoco.mj_step1(m, d)
+        self._sync_warnings()
+        self._pending = False
+
+    def _sync_warnings(self) -> None:
+        self._warning_counts = [w.number for w in self._warnings]
+
+    def _check(self, t: int) -> None:
+        """Raise if MuJoCo diverged: non-finite state or a bad qpos/qvel/qacc warning."""
+        d = self.data
+        counts = [w.number for w in self._warnings]
+        # NaN or inf make the squared norms non-finite (so do values beyond 1e154: diverged too)
+        finite = math.isfinite(np.dot(d.qpos, d.qpos) + np.dot(d.qvel, d.qvel))
+        if finite and counts == self._warning_counts:
+            return
+        problems = [f"{mujoco.mjtWarning(int(w)).name[7:]} (index {s.lastinfo})"
+                    for w, s, n, n0 in zip(_BAD_WARNINGS, self._warnings, counts, self._warning_counts, strict=True)
+                    if n != n0]
+        if not finite:
+            problems.append("non-finite qpos/qvel")
+        self._warning_counts = counts
+        raise dg.DGraphError(f"{self.name}: MuJoCo simulation diverged at tick {t}: {', '.join(problems)}; "
+                             "the state at this tick is kept (lower the gains, the time step or the applied "
+                             "wrenches)", entity=self.name)
+
+    def _stage_all(self, contact_force: np.ndarray) -> bool:
+        """Stage every state from the MuJoCo data (Pinocchio conventions); returns ``fallen``."""
+        d, jm, sensordata = self.data, self.joint_map, self.data.sensordata
+        qpos, qvel = d.qpos, d.qvel
+        self.q.stage(jm.q_from_qpos(qpos))
+        self.v.stage(jm.v_from_qvel(qpos, qvel))
+        self.imu_orientation.stage(sensordata[self._imu_quat])
+        self.imu_angular_velocity.stage(sensordata[self._imu_gyro])
+        self.imu_linear_acceleration.stage(sensordata[self._imu_acc])
+        self.encoder_position.stage(qpos[self._qpos_joints])
+        self.encoder_velocity.stage(qvel[self._qvel_joints])
+        # MuJoCo reports the wrench the parent exerts on the child subtree: negate it
+        ft = -sensordata[self._ft_block]
+        for i, state in enumerate(self._ft_states):
+            state.stage(ft[6 * i:6 * i + 6])
+        self.joint_torque.stage(d.actuator_force[self._actuated_index])
+        self.contact_force_total.stage(contact_force)
+        self.sim_time.stage(d.time)
+        fallen = bool(qpos[self._base_z] < self.fall_height)
+        self.fallen.stage(fallen)
+        return fallen
+
+    def _contact_force(self) -> np.ndarray:
+        """Sum of the contact forces the scene exerts on the robot, world frame (valid after ``mj_step2``).
+
+        ``cfrc_ext`` (computed by MuJoCo for the force/torque sensors) holds, per body, the external
+        force in the world frame: contacts plus ``xfrc_applied``; the applied part is removed.
+        """
+        return self._cfrc_robot.sum(axis=0) - self._xfrc_robot.sum(axis=0)
+
+    # -- rendering --------------------------------------------------------------------------
+    def render(self, width: int = 320, height: int = 240, camera: str = "track") -> np.ndarray:
+        """An RGB image (height x width x 3, uint8) of the current state, from ``camera`` (offscreen)."""
+        if self._pending:
+            self._restore()
+        m = self.mj_model
+        m.vis.global_.offwidth = max(m.vis.global_.offwidth, width)
+        m.vis.global_.offheight = max(m.vis.global_.offheight, height)
+        key = (width, height)
+        renderer = self._renderers.get(key)
+        if renderer is None:
+            renderer = self._renderers[key] = mujoco.Renderer(m, height, width)
+        renderer.update_scene(self.data, camera=camera)
+        return renderer.render().copy()
+
+    @dg.command
+    def snapshot(self, path: str = "snapshot.png", width: int = 640, height: int = 480) -> str:
+        """Save a PNG image of the current state (tracking camera); returns the path."""
+        from PIL import Image
+
+        Image.fromarray(self.render(width, height)).save(path)
+        return path
+
+    def _record_frame(self, t: int) -> None:
+        """After hook: keep a video frame every 1 / video_fps seconds."""
+        if t < self._next_frame:
+            return
+        self._frames.append(self.render(*self.video_size))
+        self._next_frame = t + max(1, round(1.0 / (self.video_fps * self.dt)))
+
+    def write_video(self) -> str | None:
+        """Write the recorded frames to ``video_path`` (animated GIF, WebP or PNG by its extension)."""
+        if self.video_path is None or not self._frames:
+            return None
+        from PIL import Image
+
+        images = [Image.fromarray(f) for f in self._frames]
+        images[0].save(self.video_path, save_all=True, append_images=images[1:],
+                       duration=round(1000.0 / self.video_fps), loop=0)
+        return self.video_path
+
+    def close(self) -> None:
+        """Write the video (if any) and free the renderers."""
+        self.write_video()
+        self._frames = []
+        for renderer in self._renderers.values():
+            renderer.close()
+        self._renderers = {}

@@ -1,0 +1,78 @@
+"""A compiled simulation model: robot + scene as an ``MjModel``, with its Pinocchio twin.
+
+:func:`load` is cached per process on its arguments: devices share the ``MjModel`` (each has its
+own ``MjData``) and must not modify it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from sim.conventions import JointMap
+from sim.robots import ROBOTS, RobotInfo
+from sim.scenes import add_scene
+
+
+@dataclass(frozen=True)
+class SensorLayout:
+    """Addresses in ``MjData.sensordata`` of the robot's sensors."""
+
+    imu_quat: int
+    imu_gyro: int
+    imu_accelerometer: int
+    force: dict[str, int]
+    torque: dict[str, int]
+
+
+@dataclass(frozen=True)
+class SimModel:
+    """An ``MjModel`` of a robot in a scene, the Pinocchio model it matches, and the maps between them."""
+
+    mj_model: mujoco.MjModel
+    pin_model: Any
+    joint_map: JointMap
+    robot: RobotInfo
+    sensors: SensorLayout
+    robot_bodies: slice
+    """Ids of the robot's bodies (the base's subtree, contiguous: the robot is built before the scene)."""
+
+    @property
+    def q0(self) -> np.ndarray:
+        """The robot's default configuration (a copy), Pinocchio convention."""
+        return self.robot.q0.copy()
+
+
+def _sensor_adr(m: mujoco.MjModel, name: str) -> int:
+    return int(m.sensor_adr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, name)])
+
+
+@lru_cache(maxsize=16)
+def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collisions: str = "all") -> SimModel:
+    """Build (once per process and arguments) the MuJoCo model of ``robot`` in ``scene``."""
+    if robot not in ROBOTS:
+        raise ValueError(f"unknown robot {robot!r}; known: {', '.join(ROBOTS)}")
+    if not (dt > 0.0 and np.isfinite(dt)):
+        raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
+    spec, info = ROBOTS[robot](dt, collisions)
+    add_scene(spec, scene, tracked_body=info.base_body)
+    # NaN must reach our divergence check instead of MuJoCo silently resetting the state
+    spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
+    m = spec.compile()
+    sensors = SensorLayout(
+        imu_quat=_sensor_adr(m, f"{info.imu.site}_quat"),
+        imu_gyro=_sensor_adr(m, f"{info.imu.site}_gyro"),
+        imu_accelerometer=_sensor_adr(m, f"{info.imu.site}_accelerometer"),
+        force={k: _sensor_adr(m, f"{s.site}_force") for k, s in info.force_torque.items()},
+        torque={k: _sensor_adr(m, f"{s.site}_torque") for k, s in info.force_torque.items()},
+    )
+    base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, info.base_body)
+    ids = [b for b in range(m.nbody) if m.body_rootid[b] == base]
+    if ids != list(range(ids[0], ids[-1] + 1)):
+        raise ValueError(f"the bodies of {robot} are not contiguous in the MuJoCo model")
+    bodies = slice(ids[0], ids[-1] + 1)
+    return SimModel(m, info.pin_model, JointMap(info.pin_model, m), info, sensors, bodies)

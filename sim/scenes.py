@@ -1,0 +1,149 @@
+"""Scenes: the world around the robot, added to an ``mujoco.MjSpec``.
+
+A :class:`Scene` wraps a spec and adds a floor, blocks, stairs and tilted platforms, a light and
+a camera tracking the robot. Scene geoms collide with the robot (``contype = conaffinity = 1``;
+robot geoms have ``contype = 1, conaffinity = 0``, so they touch the scene but not each other).
+Named scenes (:data:`SCENES`) are what the ``scene`` parameter of the MuJoCo device selects::
+
+    scene = Scene(spec)
+    scene.floor(friction=1.0)
+    scene.box("block", size=(0.2, 0.2, 0.2), pos=(0.6, 0.0, 0.1), free=True, mass=5.0)
+    scene.stairs(steps=3, rise=0.1, run=0.3, start=(1.0, 0.0))
+    scene.platform("ramp", size=(0.5, 0.5, 0.02), pos=(2.0, 0.0, 0.1), roll=0.0, pitch=0.1)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import mujoco
+import numpy as np
+
+SCENE_GROUP = 0
+"""Geom group of scene geoms (visible by default)."""
+
+
+def _quat_from_rpy(roll: float, pitch: float, yaw: float = 0.0) -> list[float]:
+    """MuJoCo quaternion ``(w, x, y, z)`` of ``Rz(yaw) Ry(pitch) Rx(roll)``."""
+    quat = np.zeros(4)
+    mujoco.mju_euler2Quat(quat, np.array([roll, pitch, yaw]), "xyz")
+    return quat.tolist()
+
+
+class Scene:
+    """Builder adding scene elements to an ``MjSpec`` (each method returns the created element)."""
+
+    def __init__(self, spec: mujoco.MjSpec):
+        self.spec = spec
+        self._material_added = False
+
+    def _grid_material(self) -> str:
+        if not self._material_added:
+            self.spec.add_texture(name="grid", type=mujoco.mjtTexture.mjTEXTURE_2D,
+                                  builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, width=256, height=256,
+                                  rgb1=[0.25, 0.3, 0.35], rgb2=[0.45, 0.5, 0.55])
+            material = self.spec.add_material(name="grid", texrepeat=[4.0, 4.0], reflectance=0.1)
+            material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "grid"
+            self._material_added = True
+        return "grid"
+
+    def floor(self, friction: float = 1.0, height: float = 0.0) -> mujoco.MjsGeom:
+        """An infinite plane at ``z = height`` with sliding friction ``friction``."""
+        return self.spec.worldbody.add_geom(
+            name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 0.05], pos=[0.0, 0.0, height],
+            friction=[friction, 0.005, 0.0001], material=self._grid_material(), contype=1, conaffinity=1,
+            group=SCENE_GROUP)
+
+    def box(self, name: str, size: Sequence[float], pos: Sequence[float], *, free: bool = False,
+            mass: float = 1.0, friction: float = 1.0, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0,
+            rgba: Sequence[float] = (0.6, 0.45, 0.3, 1.0)) -> mujoco.MjsGeom:
+        """A box of full ``size`` (x, y, z) centred at ``pos``; ``free=True`` makes it a movable block."""
+        half = [s / 2.0 for s in size]
+        quat = _quat_from_rpy(roll, pitch, yaw)
+        if free:
+            body = self.spec.worldbody.add_body(name=name, pos=list(pos), quat=quat)
+            body.add_freejoint(name=f"{name}_free")
+            return body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=half, mass=mass,
+                                 friction=[friction, 0.005, 0.0001], rgba=list(rgba), contype=1, conaffinity=1,
+                                 group=SCENE_GROUP)
+        return self.spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=half, pos=list(pos),
+                                            quat=quat, friction=[friction, 0.005, 0.0001], rgba=list(rgba),
+                                            contype=1, conaffinity=1, group=SCENE_GROUP)
+
+    def stairs(self, steps: int, rise: float, run: float, start: Sequence[float] = (1.0, 0.0), width: float = 1.0,
+               name: str = "step") -> list[mujoco.MjsGeom]:
+        """``steps`` static steps going up along +x: step ``k`` (from 1) is a box of height ``k * rise``
+        whose front edge is at ``x = start[0] + (k - 1) * run``, centred on ``y = start[1]``."""
+        geoms = []
+        for k in range(1, steps + 1):
+            height = k * rise
+            x = start[0] + (k - 0.5) * run
+            geoms.append(self.box(f"{name}_{k}", size=(run, width, height), pos=(x, start[1], height / 2.0)))
+        return geoms
+
+    def platform(self, name: str, size: Sequence[float], pos: Sequence[float], roll: float = 0.0,
+                 pitch: float = 0.0) -> mujoco.MjsGeom:
+        """A static tilted box (full ``size``) centred at ``pos``, rotated by ``roll`` then ``pitch`` (rad)."""
+        return self.box(name, size, pos, roll=roll, pitch=pitch)
+
+    def light(self, pos: Sequence[float] = (0.0, -1.0, 4.0), direction: Sequence[float] = (0.0, 0.3, -1.0),
+              ) -> mujoco.MjsLight:
+        """A directional light casting shadows."""
+        light = self.spec.worldbody.add_light(name="sun", pos=list(pos), dir=list(direction), castshadow=True)
+        light.type = mujoco.mjtLightType.mjLIGHT_DIRECTIONAL
+        light.diffuse = [0.8, 0.8, 0.8]
+        return light
+
+    def sky(self) -> mujoco.MjsTexture:
+        """A gradient skybox (rendering only)."""
+        return self.spec.add_texture(name="sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+                                     builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT, width=256, height=256,
+                                     rgb1=[0.55, 0.7, 0.85], rgb2=[0.1, 0.15, 0.2])
+
+    def tracking_camera(self, body: str, distance: float = 3.5, height: float = 0.0, tilt: float = 0.12,
+                        name: str = "track") -> mujoco.MjsCamera:
+        """A camera beside ``body`` (at -y, ``height`` above it, looking ``tilt`` rad down), following the
+        centre of mass of the body's subtree (the whole robot for its base)."""
+        return self.spec.body(body).add_camera(
+            name=name, pos=[0.0, -distance, height], quat=_quat_from_rpy(np.pi / 2.0 - tilt, 0.0, 0.0),
+            mode=mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM)
+
+
+def flat(scene: Scene) -> None:
+    """A flat floor (friction 1)."""
+    scene.floor(friction=1.0)
+
+
+def block(scene: Scene) -> None:
+    """Flat floor and a 10 kg free block 0.6 m in front of the robot."""
+    scene.floor(friction=1.0)
+    scene.box("block", size=(0.3, 0.4, 0.5), pos=(0.6, 0.0, 0.25), free=True, mass=10.0)
+
+
+def stairs(scene: Scene) -> None:
+    """Flat floor and three 10 cm steps of 30 cm starting 0.5 m in front of the robot."""
+    scene.floor(friction=1.0)
+    scene.stairs(steps=3, rise=0.1, run=0.3, start=(0.5, 0.0))
+
+
+def slope(scene: Scene) -> None:
+    """Flat floor and a platform pitched 0.1 rad, 1 m in front of the robot."""
+    scene.floor(friction=1.0)
+    scene.platform("slope", size=(1.0, 1.0, 0.05), pos=(1.5, 0.0, 0.05), pitch=-0.1)
+
+
+SCENES: dict[str, Callable[[Scene], None]] = {"flat": flat, "block": block, "stairs": stairs, "slope": slope}
+"""Scenes by name (the robot's light and tracking camera are added by :func:`add_scene`)."""
+
+
+def add_scene(spec: mujoco.MjSpec, name: str, tracked_body: str | None = None) -> Scene:
+    """Add the scene ``name`` to ``spec``, plus a light and (if given) a camera tracking ``tracked_body``."""
+    if name not in SCENES:
+        raise ValueError(f"unknown scene {name!r}; known: {', '.join(SCENES)}")
+    scene = Scene(spec)
+    SCENES[name](scene)
+    scene.light()
+    scene.sky()
+    if tracked_body is not None:
+        scene.tracking_camera(tracked_body)
+    return scene
