@@ -41,13 +41,13 @@ def _parse_sets(items: list[str]) -> dict[str, Any]:
     return out
 
 
-def _recorder_names(path: str) -> tuple[list[str], str]:
-    """The recorders a graph file declares, and its file-safe name."""
+def _recorder_names(path: str, types: tuple[str, ...] = ("Recorder",)) -> tuple[list[str], str]:
+    """The entities of the given types (recorders) a graph file declares, and its file-safe name."""
     from dgraph.entities.recording.recorder import safe_file_stem
     from dgraph.files import declared_entities, parse, read_text
 
     data, _ = parse(read_text(path), path)
-    names = [n for n, spec in declared_entities(data).items() if spec["type"] == "Recorder"]
+    names = [n for n, spec in declared_entities(data).items() if spec["type"] in types]
     return names, safe_file_stem(data.get("name", Path(path).stem))
 
 
@@ -65,6 +65,12 @@ def _recorder_overrides(path: str, args: argparse.Namespace) -> dict[str, Any]:
                 out[f"{name}.rrd_path"] = str(Path(rrd).with_stem(Path(rrd).stem + suffix))
         if args.npz:
             out[f"{name}.npz_path"] = str(Path(args.npz).with_stem(Path(args.npz).stem + suffix))
+    if args.rerun:  # robot views draw into the (first) recorder's recording
+        mode, rrd = _rerun_mode(args.rerun, stem)
+        for view in _recorder_names(path, ("RobotView",))[0]:
+            out[f"{view}.rerun"] = mode
+            if mode == "save":
+                out[f"{view}.rrd_path"] = out.get(f"{names[0]}.rrd_path", rrd) if names else rrd
     return out
 
 
@@ -127,7 +133,7 @@ def cmd_profile(args: argparse.Namespace) -> int:
     """Run a graph file with timing on and print where each tick's time goes (no recording)."""
     import dgraph
 
-    quiet = {f"{name}.rerun": "off" for name in _recorder_names(args.file)[0]}
+    quiet = {f"{name}.rerun": "off" for name in _recorder_names(args.file, ("Recorder", "RobotView"))[0]}
     graph = dgraph.load(args.file, {**quiet, **_parse_sets(args.set)})
     graph.validate()
     with graph:

@@ -48,3 +48,16 @@ def test_sinusoid_and_derivatives(graph):
     assert np.allclose(fd, s.velocity(t), atol=1e-5)
     scalar = graph.add(Sinusoid("x", amplitude=2.0, frequency=1.0, phase=np.pi / 2))
     assert scalar.output(0) == pytest.approx(2.0) and isinstance(scalar.output(0), float)
+
+
+def test_sinusoid_fade_in_starts_at_rest_and_its_derivatives_are_exact():
+    graph = dg.Graph(dt=0.001)
+    s = graph.add(Sinusoid("s", amplitude=[0.0, 0.05, 0.0], frequency=0.5, offset=[0.0, 0.0, 0.9], ramp=1.0))
+    assert np.allclose(s.output(0), [0.0, 0.0, 0.9]) and np.allclose(s.velocity(0), 0.0)
+    assert np.allclose(s.acceleration(0), 0.0)
+    for t in (300, 999, 1000, 1500):  # inside, at the end of, and after the fade-in
+        h = 1e-3
+        assert np.allclose((s.output(t + 1) - s.output(t - 1)) / (2 * h), s.velocity(t), atol=1e-6)
+        assert np.allclose((s.velocity(t + 1) - s.velocity(t - 1)) / (2 * h), s.acceleration(t), atol=1e-4)
+    plain = graph.add(Sinusoid("plain", amplitude=[0.0, 0.05, 0.0], frequency=0.5, offset=[0.0, 0.0, 0.9]))
+    assert np.allclose(s.output(1200), plain.output(1200)) and not np.allclose(s.output(500), plain.output(500))

@@ -94,7 +94,7 @@ class RobotView(dg.Entity):
     (``spawn``, ``serve``).
 
     Parameters: ``model`` (example-robot-data name), ``decimation``, ``path`` (entity path
-    prefix), ``floor``, ``rerun`` (``save`` | ``spawn`` | ``serve``), ``rrd_path``,
+    prefix), ``floor``, ``rerun`` (``save`` | ``spawn`` | ``serve`` | ``off``), ``rrd_path``,
     ``flush_every``. Inputs: ``q`` (``nq``, Pinocchio convention: a free-flyer base is
     ``x y z qx qy qz qw``).
     """
@@ -104,7 +104,7 @@ class RobotView(dg.Entity):
     decimation = dg.Param(20, kind="int", minimum=1, doc="log the poses one tick in N (20: 50 Hz at 1 kHz)")
     path = dg.Param("world/robot", kind="str", doc="Rerun entity path of the robot")
     floor = dg.Param(True, kind="bool", doc="also log a floor square and world axes")
-    rerun = dg.Param("save", kind="str", choices=("save", "spawn", "serve"), doc="Rerun sink")
+    rerun = dg.Param("save", kind="str", choices=("off", "save", "spawn", "serve"), doc="Rerun sink (off: nothing)")
     rrd_path = dg.Param(None, kind="str", doc=".rrd file for rerun=save (default out/<graph name>.rrd)")
     flush_every = dg.Param(200, kind="int", minimum=1, doc="ticks buffered before a Rerun send")
 
@@ -187,7 +187,7 @@ class RobotView(dg.Entity):
 
     def observe(self, t: int) -> None:
         """Every ``decimation`` ticks, compute the link poses at ``q(t)``; kept if the tick commits."""
-        if self.closed:
+        if self.closed or self.rerun == "off":
             return
         if self._stream is None:
             self._open()

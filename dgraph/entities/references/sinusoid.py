@@ -16,8 +16,14 @@ class Sinusoid(dg.Entity):
     ``output = offset + amplitude * sin(2 pi frequency s + phase)``,
     ``velocity`` and ``acceleration`` its first and second time derivatives.
 
+    With ``ramp = T > 0`` the amplitude fades in over the first ``T`` seconds with the
+    minimum-jerk envelope ``e(s) = 10 x^3 - 15 x^4 + 6 x^5``, ``x = min(s / T, 1)``:
+    ``output = offset + e(s) A sin(w s + phase)`` (and its exact derivatives), so a robot at
+    rest can follow from the first tick without a velocity step.
+
     Parameters: ``amplitude`` (scalar or vector), ``frequency`` (Hz), ``phase`` (rad),
-    ``offset`` (same shape as amplitude, default 0), ``dt`` (default: the graph's).
+    ``offset`` (same shape as amplitude, default 0), ``ramp`` (s, default 0: no fade-in),
+    ``dt`` (default: the graph's).
     Outputs depend on time only.
     """
 
@@ -25,6 +31,7 @@ class Sinusoid(dg.Entity):
     frequency = dg.Param(kind="vector", doc="frequency in Hz (scalar or per component)")
     phase = dg.Param(0.0, kind="vector", doc="phase in rad (scalar or per component)")
     offset = dg.Param(0.0, kind="vector", doc="offset (scalar or per component)")
+    ramp = dg.Param(0.0, kind="float", minimum=0.0, doc="fade-in duration of the amplitude in s (0: none)")
     dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
 
     def configure(self) -> None:
@@ -35,28 +42,38 @@ class Sinusoid(dg.Entity):
         self._offset = np.broadcast_to(self.offset, self.value_shape)
         self._scalar = self.value_shape == ()
 
+    def _envelope(self, s: float) -> tuple[float, float, float]:
+        """``e, e_dot, e_ddot`` of the fade-in at time ``s``."""
+        if self.ramp <= 0.0 or s >= self.ramp:
+            return 1.0, 0.0, 0.0
+        x = max(s, 0.0) / self.ramp
+        return (x**3 * (10 - 15 * x + 6 * x * x), 30 * x * x * (1 - x) ** 2 / self.ramp,
+                60 * x * (1 - x) * (1 - 2 * x) / self.ramp**2)
+
     def _wave(self, t: int, derivative: int) -> Any:
         s = t * self.dt
         arg = self._omega * s + self._phase
+        e, de, dde = self._envelope(s)
+        sin, cos = self.amplitude * np.sin(arg), self.amplitude * self._omega * np.cos(arg)
         if derivative == 0:
-            value = self._offset + self.amplitude * np.sin(arg)
+            value = self._offset + e * sin
         elif derivative == 1:
-            value = self.amplitude * self._omega * np.cos(arg)
+            value = e * cos + de * sin
         else:
-            value = -self.amplitude * self._omega**2 * np.sin(arg)
+            value = -e * self._omega**2 * sin + 2 * de * cos + dde * sin
         return float(value) if self._scalar else value
 
     @dg.output(shape=lambda self: self.value_shape, depends=("t",))
     def output(self, t: int) -> Any:
-        """Position: ``offset + A sin(w s + phi)``."""
+        """Position: ``offset + e(s) A sin(w s + phi)``."""
         return self._wave(t, 0)
 
     @dg.output(shape=lambda self: self.value_shape, depends=("t",))
     def velocity(self, t: int) -> Any:
-        """Velocity: ``A w cos(w s + phi)``."""
+        """Velocity: its time derivative."""
         return self._wave(t, 1)
 
     @dg.output(shape=lambda self: self.value_shape, depends=("t",))
     def acceleration(self, t: int) -> Any:
-        """Acceleration: ``-A w^2 sin(w s + phi)``."""
+        """Acceleration: its second time derivative."""
         return self._wave(t, 2)
