@@ -70,8 +70,10 @@ class MujocoDevice(dg.Device):
     collisions = dg.Param("all", kind="str", choices=("feet", "all"),
                           doc="robot geoms touching the scene: every collision mesh (never each other), or soles only")
     control_mode = dg.Param("torque", kind="str", choices=("torque", "position"), doc="what control commands")
-    kp = dg.Param(3000.0, kind="vector", doc="position mode stiffness, N m/rad (scalar or one per joint)")
-    kd = dg.Param(60.0, kind="vector", doc="position mode damping, N m s/rad (scalar or one per joint)")
+    kp = dg.Param(None, kind="vector", doc="position mode stiffness, N m/rad, scalar or one per joint "
+                  "(default: the robot's, TALOS 3000, grippers 100)")
+    kd = dg.Param(None, kind="vector", doc="position mode damping, N m s/rad, scalar or one per joint "
+                  "(default: the robot's, TALOS 60, grippers 1)")
     q0 = dg.Param(None, kind="vector", doc="initial configuration, nq (default: half-sitting on the floor)")
     v0 = dg.Param(None, kind="vector", doc="initial velocity, nv (default: zeros)")
     dt = dg.Param(None, kind="float", minimum=1e-6, maximum=1.0, doc="time step in s (default: the graph's dt)")
@@ -115,7 +117,8 @@ class MujocoDevice(dg.Device):
         self.nq, self.nv, self.na = self.joint_map.nq, self.joint_map.nv, self.joint_map.na
         self._gains = {}
         for name in ("kp", "kd"):
-            gain = np.asarray(getattr(self, name), dtype=float)
+            value = getattr(self, name)
+            gain = np.asarray(getattr(self.sim.robot, name) if value is None else value, dtype=float)
             if gain.shape not in ((), (self.na,)) or not np.isfinite(gain).all():
                 raise dg.ParamError(f"{self.name}: parameter {name!r} must be a finite scalar or {self.na} values",
                                     entity=self.name)

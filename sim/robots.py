@@ -74,6 +74,10 @@ class RobotInfo:
     force_torque: dict[str, SensorSite] = field(default_factory=dict)
     q0: np.ndarray = field(default_factory=lambda: np.zeros(0))
     """Default configuration (Pinocchio convention): half-sitting, soles on the ground z = 0."""
+    kp: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Default joint stiffness of a position-mode PD (actuated order), N m/rad."""
+    kd: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    """Default joint damping of a position-mode PD (actuated order), N m s/rad."""
 
 
 @lru_cache(maxsize=4)
@@ -151,7 +155,12 @@ def talos_spec(dt: float = 0.001, collisions: str = "all") -> tuple[mujoco.MjSpe
         "right_wrist": SensorSite("ft_right_wrist", "wrist_right_ft_link", "wrist_right_ft_link"),
     }
     _add_sensor_sites(spec, imu, force_torque)
-    info = RobotInfo("talos", pin_model, "base_link", feet, imu, force_torque, _standing_q0(pin_model))
+    # kp 3000, kd 60 hold TALOS standing; the grippers (no rotor inertia, 1.2e-3 kg m²) need far
+    # lower gains: an explicit PD is stable at 1 ms only while kd dt / inertia < 2
+    kp, kd = np.full(pin_model.nv - 6, 3000.0), np.full(pin_model.nv - 6, 60.0)
+    grippers = [pin_model.joints[pin_model.getJointId(f"gripper_{s}_joint")].idx_v - 6 for s in ("left", "right")]
+    kp[grippers], kd[grippers] = 100.0, 1.0
+    info = RobotInfo("talos", pin_model, "base_link", feet, imu, force_torque, _standing_q0(pin_model), kp, kd)
     return spec, info
 
 

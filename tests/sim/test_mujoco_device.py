@@ -1,0 +1,245 @@
+"""MujocoDevice: TALOS standing and falling, sensors, wrenches, divergence, resume, rendering."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import dgraph as dg
+from sim.device import MujocoDevice
+
+G = 9.81
+
+
+def standing_graph(**params):
+    """Position mode at half-sitting with the gravity torque g(q0) as feed-forward (kp 3000, kd 60,
+    grippers 100 and 1)."""
+    g = dg.Graph(dt=0.001, name="standing")
+    dev = g.add(MujocoDevice("sim", control_mode="position", **params))
+    model = dev.sim.pin_model
+    q0 = dev.q.value.copy()
+    dev.control.set(q0[7:])
+    dev.feedforward_torque.set(pin.rnea(model, model.createData(), q0, np.zeros(model.nv), np.zeros(model.nv))[6:])
+    return g, dev
+
+
+@pytest.fixture(scope="module")
+def stood():
+    """Two seconds of standing, with the base position of every tick."""
+    g, dev = standing_graph()
+    base = []
+    dev.after.add(lambda t: base.append(dev.q.value[:3]))
+    g.run(duration=2.0)
+    return g, dev, np.array(base)
+
+
+def mass(dev, body):
+    m = dev.mj_model
+    return float(m.body_subtreemass[m.body(body).id])
+
+
+def site_rotation(dev, site):
+    return dev.data.site_xmat[dev.mj_model.site(site).id].reshape(3, 3)
+
+
+def test_position_mode_with_gravity_feedforward_stands_two_seconds(stood):
+    g, dev, base = stood
+    q0 = dev.sim.q0
+    assert g.t == 2000 and len(base) == 2000
+    assert np.abs(base[:, 2] - q0[2]).max() < 0.01
+    assert np.abs(base[:, :2] - q0[:2]).max() < 0.03  # a slow sway over the compliant ankles
+    assert not dev.fallen.value and dev.sim_time.value == pytest.approx(2.0)
+    assert np.abs(dev.encoder_velocity.value).max() < 0.1  # no chattering joint (grippers: low gains)
+    assert np.abs(dev.encoder_position.value - q0[7:]).max() < 0.03  # PD error under load (knees)
+
+
+def test_imu_matches_the_pinocchio_imu_frame(stood):
+    _, dev, _ = stood
+    model = dev.sim.pin_model
+    data = model.createData()
+    q, v = dev.q.value, dev.v.value
+    pin.forwardKinematics(model, data, q, v)
+    frame = model.getFrameId("imu_link")
+    pin.updateFramePlacements(model, data)
+    x, y, z, w = dev.imu_orientation.value
+    np.testing.assert_allclose(pin.Quaternion(w, x, y, z).toRotationMatrix(), data.oMf[frame].rotation, atol=1e-9)
+    omega = pin.getFrameVelocity(model, data, frame, pin.LOCAL).angular
+    np.testing.assert_allclose(dev.imu_angular_velocity.value, omega, atol=1e-9)
+    # standing still, the accelerometer reads +g along the world's up axis, in the IMU frame
+    up = data.oMf[frame].rotation.T @ np.array([0.0, 0.0, G])
+    np.testing.assert_allclose(dev.imu_linear_acceleration.value, up, atol=1.0)  # sway: < 1 m/s²
+    np.testing.assert_array_equal(dev.encoder_position.value, q[7:])
+    np.testing.assert_array_equal(dev.encoder_velocity.value, v[6:])
+
+
+def test_force_torque_sensors_carry_the_weight(stood):
+    _, dev, _ = stood
+    total = mass(dev, "base_link")
+    feet = mass(dev, "leg_left_6_link") + mass(dev, "leg_right_6_link")
+    ankles = [site_rotation(dev, f"ft_{side}_ankle") @ getattr(dev, f"ft_{side}_ankle").value[:3]
+              for side in ("left", "right")]
+    assert sum(f[2] for f in ankles) == pytest.approx((total - feet) * G, rel=0.02)
+    for side, force in zip(("left", "right"), ankles, strict=True):
+        assert force[2] > 0.35 * total * G, side  # each foot carries about half, pushing the leg up
+        assert getattr(dev, f"ft_{side}_ankle").value[2] > 0.35 * total * G  # sensor z is about up
+    contact = dev.contact_force_total.value
+    assert contact[2] == pytest.approx(total * G, rel=0.02)
+    assert np.abs(contact[:2]).max() < 0.05 * total * G
+    for side in ("left", "right"):  # a hanging hand pulls the arm down with its weight
+        hand = site_rotation(dev, f"ft_{side}_wrist") @ getattr(dev, f"ft_{side}_wrist").value[:3]
+        weight = mass(dev, f"wrist_{side}_ft_link") * G
+        assert hand[2] == pytest.approx(-weight, rel=0.05) and np.abs(hand[:2]).max() < 0.1 * weight
+
+
+def test_joint_torque_is_the_clipped_pd_law(stood):
+    g, dev, _ = stood
+    t = g.t
+    q_j, v_j = dev.encoder_position(t), dev.encoder_velocity(t)
+    kp, kd = np.full(32, 3000.0), np.full(32, 60.0)
+    kp[[21, 29]], kd[[21, 29]] = 100.0, 1.0  # grippers
+    expected = dev.feedforward_torque(t) + kp * (dev.control(t) - q_j) - kd * v_j
+    g.step()
+    limits = dev.mj_model.actuator_ctrlrange[dev.joint_map.actuated_index, 1]
+    np.testing.assert_allclose(dev.joint_torque.value, np.clip(expected, -limits, limits), atol=1e-9)
+
+
+def test_torque_mode_clips_to_the_effort_limits():
+    g = dg.Graph(dt=0.001)
+    dev = g.add(MujocoDevice("sim"))
+    limits = dev.sim.pin_model.effortLimit[6:]
+    dev.control.set(np.full(32, 1e4))
+    g.step()
+    np.testing.assert_array_equal(dev.joint_torque.value, limits)
+    assert limits[3] == 300.0  # leg_left_4 (knee), as in the URDF
+    dev.control.set(np.full(32, -1e4))
+    g.step()
+    np.testing.assert_array_equal(dev.joint_torque.value, -limits)
+
+
+def test_zero_torque_falls_and_stop_on_fall_names_the_tick():
+    g = dg.Graph(dt=0.001)
+    dev = g.add(MujocoDevice("sim"))
+    dev.control.set(np.zeros(32))
+    fell_at = []
+    dev.after.add(lambda t: fell_at.append(t) if dev.fallen.value and not fell_at else None)
+    g.run(duration=1.5)
+    assert dev.fallen.value and 100 < fell_at[0] < 1000
+    assert 0.0 < dev.q.value[2] < 0.4  # lying on the floor (all collision meshes touch it)
+
+    g2 = dg.Graph(dt=0.001)
+    dev2 = g2.add(MujocoDevice("sim", stop_on_fall=True))
+    dev2.control.set(np.zeros(32))
+    with pytest.raises(dg.DGraphError, match=rf"sim: the robot fell during tick {fell_at[0] - 1} ") as err:
+        g2.run(duration=1.5)
+    assert err.value.entity == "sim" and g2.t == fell_at[0] - 1 and not dev2.fallen.value
+    with pytest.raises(dg.DGraphError, match=rf"tick {fell_at[0] - 1} "):  # resuming replays the same step
+        g2.step()
+
+
+def test_an_external_wrench_pushes_the_base():
+    pushed_graph, pushed = standing_graph(wrench_bodies=["base_link"])
+    still_graph, still = standing_graph()
+    push = np.array([60.0, 0.0, 0.0])
+    pushed.wrench_base_link.set([*push, 0.0, 0.0, 0.0])
+    contact = []
+    pushed.after.add(lambda t: contact.append(pushed.contact_force_total.value))
+    pushed_graph.run(duration=0.5)
+    still_graph.run(duration=0.5)
+    assert pushed.q.value[0] - still.q.value[0] > 0.01
+    # Newton for the whole robot over the run: sum of dt (contact + push + weight) = m v_com
+    # (contact_force_total excludes the applied wrench; it starts at rest)
+    model = pushed.sim.pin_model
+    data = model.createData()
+    pin.centerOfMass(model, data, pushed.q.value, pushed.v.value)
+    mass = pin.computeTotalMass(model)
+    impulse = 0.001 * (np.sum(contact, axis=0) + 500 * (push + np.array([0.0, 0.0, -mass * G])))
+    np.testing.assert_allclose(impulse, mass * data.vcom[0], atol=1e-4)  # N s (measured 1e-6), vs 30 N s pushed
+    assert np.mean(contact, axis=0)[0] < -40.0  # the floor holds the robot back
+
+
+def test_divergence_raises_and_keeps_the_state():
+    g = dg.Graph(dt=0.001)
+    dev = g.add(MujocoDevice("sim", wrench_bodies=["base_link", "arm_left_7_link"]))
+    assert "wrench_arm_left_7_link" in dev.inputs
+    dev.control.set(np.zeros(32))
+    g.run(ticks=5)
+    q = dev.q.value.copy()
+    dev.wrench_base_link.set([1e12, 0.0, 0.0, 0.0, 0.0, 0.0])
+    with pytest.raises(dg.DGraphError, match=r"sim: MuJoCo simulation diverged at tick 5: BADQACC") as err:
+        g.step()
+    assert err.value.entity == "sim" and g.t == 5
+    np.testing.assert_array_equal(dev.q.value, q)
+    dev.wrench_base_link.set(np.zeros(6))  # the failed step is undone: the run goes on
+    g.step()
+    assert np.isfinite(dev.q.value).all() and abs(dev.q.value[2] - q[2]) < 1e-3
+    dev.control.set(np.full(32, np.inf))
+    with pytest.raises(dg.DGraphError, match="non-finite joint torque at tick 6"):
+        g.step()
+
+
+class FailOnce(dg.Entity):
+    """An observer failing once at a given tick (after the device stepped MuJoCo)."""
+
+    observes = True
+    at = dg.Param(0, kind="int")
+
+    def setup(self):
+        self.failed = False
+
+    def observe(self, t):
+        if t == self.at and not self.failed:
+            self.failed = True
+            raise RuntimeError("boom")
+
+
+def test_resume_after_a_failed_tick_is_identical():
+    runs = []
+    for fail in (False, True):
+        g, dev = standing_graph(wrench_bodies=["base_link"])
+        dev.wrench_base_link.set([0.0, 40.0, 0.0, 0.0, 0.0, 5.0])  # some motion
+        if fail:
+            g.add(FailOnce("fail", at=150))
+            with pytest.raises(RuntimeError, match="boom"):
+                g.run(ticks=300)
+            assert g.t == 150 and dev.q.time == 150
+            g.run(ticks=150)
+        else:
+            g.run(ticks=300)
+        runs.append({name: np.array(s.value) for name, s in dev.outputs.items()})
+    assert np.abs(runs[0]["v"]).max() > 0.01
+    for name, value in runs[0].items():
+        np.testing.assert_array_equal(runs[1][name], value, err_msg=name)
+
+
+def test_parameters_are_checked():
+    with pytest.raises(dg.ParamError, match="wrench body 'nose' is not in the model"):
+        MujocoDevice("sim", wrench_bodies=["nose"])
+    with pytest.raises(dg.ParamError, match="'kp' must be a finite scalar or 32 values"):
+        MujocoDevice("sim", kp=[1.0, 2.0])
+    with pytest.raises(dg.ParamError, match="q0 needs 39"):
+        MujocoDevice("sim", q0=np.zeros(7))
+    assert dg.get_type("MujocoDevice") is MujocoDevice  # through the dgraph.entities entry point
+
+
+def render_or_skip(dev, width, height):
+    try:
+        return dev.render(width, height)
+    except Exception as exc:  # no EGL on this machine
+        pytest.skip(f"offscreen rendering unavailable (MUJOCO_GL=egl): {type(exc).__name__}: {exc}")
+
+
+def test_render_snapshot_and_video(tmp_path):
+    with dg.Graph(dt=0.001) as g:
+        dev = g.add(MujocoDevice("sim", video_path=str(tmp_path / "fall.gif"), video_fps=100.0, video_size=[32, 24]))
+        image = render_or_skip(dev, 64, 48)
+        assert image.shape == (48, 64, 3) and image.dtype == np.uint8
+        assert image.std() > 10.0  # robot, floor and sky, not a uniform image
+        assert dev.snapshot(str(tmp_path / "s.png"), 64, 48) == str(tmp_path / "s.png")
+        dev.control.set(np.zeros(32))
+        g.run(ticks=25)  # frames after ticks 1, 11, 21
+    from PIL import Image
+
+    assert Image.open(tmp_path / "s.png").size == (64, 48)
+    video = Image.open(tmp_path / "fall.gif")
+    assert video.n_frames == 3 and video.size == (32, 24)

@@ -1,0 +1,52 @@
+"""Scenes: floor, blocks, stairs and tilted platforms on a bare MjSpec (no robot: fast)."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from sim.scenes import SCENES, Scene, add_scene
+
+
+def test_a_free_block_falls_and_rests_on_the_floor():
+    spec = mujoco.MjSpec()
+    scene = Scene(spec)
+    scene.floor(friction=1.0)
+    scene.box("block", size=(0.2, 0.3, 0.4), pos=(0.0, 0.0, 0.5), free=True, mass=5.0)
+    m = spec.compile()
+    d = mujoco.MjData(m)
+    mujoco.mj_step(m, d, 2000)
+    assert m.body("block").mass[0] == pytest.approx(5.0)
+    assert d.qpos[2] == pytest.approx(0.2, abs=2e-3)  # half its height, resting
+    assert np.abs(d.qvel).max() < 1e-2
+
+
+def test_stairs_and_platform_geometry():
+    spec = mujoco.MjSpec()
+    scene = Scene(spec)
+    scene.floor()
+    scene.stairs(steps=3, rise=0.1, run=0.3, start=(1.0, 0.0), width=0.8)
+    scene.platform("ramp", size=(1.0, 1.0, 0.05), pos=(3.0, 0.0, 0.1), roll=0.0, pitch=0.2)
+    m = spec.compile()
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    for k in (1, 2, 3):
+        geom = m.geom(f"step_{k}")
+        top = d.geom_xpos[geom.id][2] + geom.size[2]
+        front = d.geom_xpos[geom.id][0] - geom.size[0]
+        assert top == pytest.approx(0.1 * k) and front == pytest.approx(1.0 + 0.3 * (k - 1))
+        assert geom.size[1] == pytest.approx(0.4)
+    ramp = d.geom_xmat[m.geom("ramp").id].reshape(3, 3)
+    assert np.arccos(ramp[2, 2]) == pytest.approx(0.2)  # its normal is tilted by the pitch
+
+
+def test_named_scenes_compile_with_light_and_camera():
+    for name in SCENES:
+        spec = mujoco.MjSpec()
+        spec.worldbody.add_body(name="base").add_geom(size=[0.1, 0, 0])
+        add_scene(spec, name, tracked_body="base")
+        m = spec.compile()
+        assert m.nlight == 1 and m.ncam == 1 and m.geom("floor").id >= 0
+    with pytest.raises(ValueError, match="unknown scene"):
+        add_scene(mujoco.MjSpec(), "moon")
