@@ -168,9 +168,18 @@ class MujocoDevice(dg.Device):
         self._imu_gyro = slice(sensors.imu_gyro, sensors.imu_gyro + 3)
         self._imu_acc = slice(sensors.imu_accelerometer, sensors.imu_accelerometer + 3)
         self._base_z = int(self.joint_map.qpos_index[2])
-        bodies = self.sim.robot_bodies  # a slice: these are views on the MjData buffers
-        self._cfrc_robot = self.data.cfrc_ext[bodies, 3:]
-        self._xfrc_robot = self.data.xfrc_applied[bodies, :3]
+        # views on the MjData buffers (fixed for its lifetime; mj_setState writes into them)
+        d = self.data
+        self._qpos, self._qvel, self._ctrl, self._xfrc = d.qpos, d.qvel, d.ctrl, d.xfrc_applied
+        self._sensordata, self._actuator_force = d.sensordata, d.actuator_force
+        bodies = self.sim.robot_bodies  # a slice
+        self._cfrc_robot = d.cfrc_ext[bodies, 3:]
+        self._xfrc_robot = d.xfrc_applied[bodies, :3]
+        self._ones = np.ones(bodies.stop - bodies.start)
+        self._ctrl_identity = bool(np.array_equal(self._ctrl_index, np.arange(self.na)))
+        self._torque_mode = self.control_mode == "torque"
+        self._kp, self._kd = self._gains["kp"], self._gains["kd"]
+        self._timestep = float(m.opt.timestep)
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._frames: list[np.ndarray] = []
         self._next_frame = 0
@@ -206,13 +215,12 @@ class MujocoDevice(dg.Device):
     def _torque(self, t: int) -> np.ndarray:
         """Joint torques (actuated order) from the inputs at ``t``, before clipping."""
         u = self.control(t)
-        if self.control_mode == "torque":
+        if self._torque_mode:
             tau = u
         else:
-            d = self.data
-            tau = (self.feedforward_torque(t) + self._gains["kp"] * (u - d.qpos[self._qpos_joints])
-                   + self._gains["kd"] * (self.velocity_reference(t) - d.qvel[self._qvel_joints]))
-        if not np.isfinite(tau).all():
+            tau = (self.feedforward_torque(t) + self._kp * (u - self._qpos[self._qpos_joints])
+                   + self._kd * (self.velocity_reference(t) - self._qvel[self._qvel_joints]))
+        if not math.isfinite(np.dot(tau, tau)):  # inf or NaN (or absurd values beyond 1e154)
             raise dg.DGraphError(f"{self.name}: non-finite joint torque at tick {t} (control_mode "
                                  f"{self.control_mode}): {tau}", entity=self.name, signal="control")
         return tau
@@ -223,8 +231,8 @@ class MujocoDevice(dg.Device):
         if self._pending:
             self._restore()
         dt = self.dt
-        if m.opt.timestep != dt:
-            m.opt.timestep = dt
+        if dt != self._timestep:
+            m.opt.timestep = self._timestep = dt
         tau = self._torque(t)
         wrenches = [(body, self.signal(port)(t)) for body, port in self._wrenches]
         for (_, port), (_, wrench) in zip(self._wrenches, wrenches, strict=True):
@@ -232,9 +240,9 @@ class MujocoDevice(dg.Device):
                 raise dg.DGraphError(f"{self.name}: non-finite {port} at tick {t}", entity=self.name, signal=port)
         mujoco.mj_getState(m, d, self._saved, _STATE)
         self._pending = True
-        d.ctrl[:] = tau[self._ctrl_index]
+        self._ctrl[:] = tau if self._ctrl_identity else tau[self._ctrl_index]
         for body, wrench in wrenches:
-            d.xfrc_applied[body] = wrench
+            self._xfrc[body] = wrench
         mujoco.mj_step2(m, d)
         contact_force = self._contact_force()  # contact forces of this step: read before mj_step1
         mujoco.mj_step1(m, d)
@@ -277,10 +285,10 @@ class MujocoDevice(dg.Device):
 
     def _check(self, t: int) -> None:
         """Raise if MuJoCo diverged: non-finite state or a bad qpos/qvel/qacc warning."""
-        d = self.data
+        qpos, qvel = self._qpos, self._qvel
         counts = [w.number for w in self._warnings]
         # NaN or inf make the squared norms non-finite (so do values beyond 1e154: diverged too)
-        finite = math.isfinite(np.dot(d.qpos, d.qpos) + np.dot(d.qvel, d.qvel))
+        finite = math.isfinite(np.dot(qpos, qpos) + np.dot(qvel, qvel))
         if finite and counts == self._warning_counts:
             return
         problems = [f"{mujoco.mjtWarning(int(w)).name[7:]} (index {s.lastinfo})"
@@ -295,8 +303,7 @@ class MujocoDevice(dg.Device):
 
     def _stage_all(self, contact_force: np.ndarray) -> bool:
         """Stage every state from the MuJoCo data (Pinocchio conventions); returns ``fallen``."""
-        d, jm, sensordata = self.data, self.joint_map, self.data.sensordata
-        qpos, qvel = d.qpos, d.qvel
+        jm, sensordata, qpos, qvel = self.joint_map, self._sensordata, self._qpos, self._qvel
         self.q.stage(jm.q_from_qpos(qpos))
         self.v.stage(jm.v_from_qvel(qpos, qvel))
         self.imu_orientation.stage(sensordata[self._imu_quat])
@@ -308,9 +315,9 @@ class MujocoDevice(dg.Device):
         ft = -sensordata[self._ft_block]
         for i, state in enumerate(self._ft_states):
             state.stage(ft[6 * i:6 * i + 6])
-        self.joint_torque.stage(d.actuator_force[self._actuated_index])
+        self.joint_torque.stage(self._actuator_force[self._actuated_index])
         self.contact_force_total.stage(contact_force)
-        self.sim_time.stage(d.time)
+        self.sim_time.stage(self.data.time)
         fallen = bool(qpos[self._base_z] < self.fall_height)
         self.fallen.stage(fallen)
         return fallen
@@ -321,7 +328,10 @@ class MujocoDevice(dg.Device):
         ``cfrc_ext`` (computed by MuJoCo for the force/torque sensors) holds, per body, the external
         force in the world frame: contacts plus ``xfrc_applied``; the applied part is removed.
         """
-        return self._cfrc_robot.sum(axis=0) - self._xfrc_robot.sum(axis=0)
+        total = self._ones @ self._cfrc_robot
+        if self._wrenches:
+            total -= self._ones @ self._xfrc_robot
+        return total
 
     # -- rendering --------------------------------------------------------------------------
     def render(self, width: int = 320, height: int = 240, camera: str = "track") -> np.ndarray:
