@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import pytest
-from conftest import Scale
 
 import dgraph as dg
 from dgraph.entities.operators import Add, Gain
+from tests.conftest import Scale
 
 
 def test_name_first_and_params_typed():

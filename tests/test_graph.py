@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import networkx as nx
 import pytest
-from conftest import Scale, Sum2, Ticker
 
 import dgraph as dg
 from dgraph.entities.discrete import Delay
 from dgraph.entities.operators import Add, Constant, Gain
+from tests.conftest import Scale, Sum2, Ticker
 
 
 def test_unique_names_and_lookup(graph):

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import Scale, Ticker
 
 import dgraph as dg
+from tests.conftest import Scale, Ticker
 
 
 def test_tick_order_before_control_commit_after(graph):

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import Ticker
 
 import dgraph as dg
 from dgraph.entities.discrete import Delay, Integrator
 from dgraph.entities.references import Sinusoid
+from tests.conftest import Ticker
 
 
 def test_delay_outputs_the_previous_input(graph):

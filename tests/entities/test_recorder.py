@@ -8,12 +8,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import Scale, Ticker
 
 import dgraph as dg
 from dgraph.entities.recording import Recorder, read_series
 from dgraph.entities.recording.recorder import component_names
 from dgraph.entities.references import Sinusoid
+from tests.conftest import Scale, Ticker
 
 
 def build(tmp_path: Path, rerun: str = "save") -> dg.Graph:

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import Ticker
 
 import dgraph as dg
 from dgraph.entities.references import MinimumJerk, TrajectoryFile
 from dgraph.entities.references.trajectory_file import natural_spline_second_derivatives
+from tests.conftest import Ticker
 
 DT = 0.001
 

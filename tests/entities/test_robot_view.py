@@ -8,13 +8,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import Scale
 
 import dgraph as dg
 from dgraph.entities.devices import KinematicDevice
 from dgraph.entities.operators import Constant
 from dgraph.entities.recording import Recorder, RobotView, open_stream, read_series
 from dgraph.entities.recording.robot_view import load_robot, quaternions_xyzw
+from tests.conftest import Scale
 
 pin = pytest.importorskip("pinocchio")
 chunk = pytest.importorskip("rerun.chunk")

@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 
 import numpy as np
-from conftest import Periodic, Ticker
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -13,6 +12,7 @@ import dgraph as dg
 from dgraph.entities.discrete import Delay, Integrator
 from dgraph.entities.operators import Add, Gain, Saturation, Switch
 from dgraph.entities.references import Sinusoid
+from tests.conftest import Periodic, Ticker
 
 EXAMPLES = int(os.environ.get("DGRAPH_HYPOTHESIS_EXAMPLES", "60"))
 """Random graphs per run; raise it for a long soak (e.g. 2000)."""

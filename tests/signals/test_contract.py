@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import Clocked, Periodic, Scale, Sum2, Ticker
 
 import dgraph as dg
+from tests.conftest import Clocked, Periodic, Scale, Sum2, Ticker
 
 
 def test_outputs_are_lazy_and_computed_once_per_tick(graph):
