@@ -32,20 +32,33 @@ RECORDED = ["com_reference.output", "robot.com_position", "com.error", "solver.c
             "device.q", "estimator.q", "device.contact_force_total", "device.fallen"]
 
 
-def build(duration: float = 20.0) -> dg.Graph:
-    """TALOS in MuJoCo, estimator, model, CoM sway, waist, posture, momentum, two feet, ID QP."""
+TASKS = ("com_task", "waist_task", "posture_task", "momentum_task")
+FEATURES = {
+    "com_task": lambda: CenterOfMass("com"),
+    "waist_task": lambda: FramePose("waist", frame="base_link", mask="000111"),
+    "posture_task": lambda: JointPosture("posture", model="talos"),
+    "momentum_task": lambda: AngularMomentum("momentum"),
+}
+
+
+def build(duration: float = 20.0, tasks: tuple[str, ...] = TASKS, record: bool = True) -> dg.Graph:
+    """TALOS in MuJoCo, estimator, model, CoM sway, waist, posture, momentum, two feet, ID QP.
+
+    ``tasks`` selects a subset of the tasks (``bench/talos_tick.py`` runs CoM and posture only,
+    TSID's benchmark set); ``record=False`` leaves out the Recorder and the 3D view.
+    """
     g = dg.Graph(dt=0.001, name="talos_sway")
     g.duration = duration
     g.add(MujocoDevice("device", model="talos", scene="flat", control_mode="torque"))
     g.add(FloatingBaseEstimator("estimator", model="talos"))
     g.add(RobotModel("robot", model="talos"))
-    g.add(CenterOfMass("com"))
-    g.add(FramePose("waist", frame="base_link", mask="000111"))
-    g.add(JointPosture("posture", model="talos"))
-    g.add(AngularMomentum("momentum"))
+    features = {task: FEATURES[task]() for task in TASKS if task in tasks}  # com_task is required
+    for feature in features.values():
+        g.add(feature)
     g.add(Sinusoid("com_reference", amplitude=[0.0, 0.05, 0.0], frequency=0.5, ramp=1.0, offset=HALF_SITTING_COM))
-    tasks = {"com_task": (1000.0, 20.0, 3.0), "waist_task": (1.0, 100.0, 20.0),
+    gains = {"com_task": (1000.0, 20.0, 3.0), "waist_task": (1.0, 100.0, 20.0),
              "posture_task": (0.1, POSTURE_KP, None), "momentum_task": (0.02, 10.0, None)}
+    tasks = {name: gains[name] for name in TASKS if name in tasks}
     for name in tasks:
         g.add(Task(name, critical_damping=True) if name == "posture_task" else Task(name))
     for side in ("left", "right"):
@@ -56,13 +69,13 @@ def build(duration: float = 20.0) -> dg.Graph:
         g.plug(f"device.{sensor}", f"estimator.{sensor}")
     g.plug("estimator.q", "robot.q")
     g.plug("estimator.v", "robot.v")
-    for reader in ("com", "waist", "posture", "momentum", "left_foot", "right_foot", "solver"):
+    for reader in (*(f.name for f in features.values()), "left_foot", "right_foot", "solver"):
         g.plug("robot.state", f"{reader}.robot")
     g.plug("com_reference.output", "com.reference_position")
     g.plug("com_reference.velocity", "com.reference_velocity")
     g.plug("com_reference.acceleration", "com.reference_acceleration")
     for name in tasks:
-        g.plug(f"{name.removesuffix('_task')}.feature", f"{name}.feature")
+        g.plug(f"{features[name].name}.feature", f"{name}.feature")
         g.plug(f"{name}.equation", f"solver.{name}")
     for name in ("left_foot", "right_foot"):
         g.plug(f"{name}.contact", f"solver.{name}")
@@ -76,9 +89,10 @@ def build(duration: float = 20.0) -> dg.Graph:
     for name in ("left_foot", "right_foot"):
         g[name].kp.set(30.0)
         g[name].kd.set(11.0)
-    g.add(RobotView("view", model="talos", decimation=20))
-    g.plug("device.q", "view.q")
-    g.add(Recorder("recorder", signals=RECORDED))
+    if record:
+        g.add(RobotView("view", model="talos", decimation=20))
+        g.plug("device.q", "view.q")
+        g.add(Recorder("recorder", signals=RECORDED))
     return g
 
 

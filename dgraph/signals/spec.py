@@ -82,14 +82,17 @@ class Spec:
         try:
             if self.shape == () or (self.shape is None and np.ndim(value) == 0):
                 return self._coerce_scalar(value, where)
-            array = np.array(value, dtype=_NUMPY[self.dtype])
+            if type(value) is np.ndarray and value.dtype == _NUMPY[self.dtype]:
+                array = value.copy()
+            else:
+                array = np.array(value, dtype=_NUMPY[self.dtype])
         except SpecError:
             raise
         except (TypeError, ValueError, OverflowError) as exc:
             raise SpecError(f"{where}: cannot convert {_short(value)} to {self!r}: {exc}") from None
         if not self._shape_ok(array.shape):
             raise SpecError(f"{where}: value of shape {array.shape} does not match {self!r}")
-        if self.dtype == "float" and np.isnan(array).any():
+        if self.dtype == "float" and _has_nan(array):
             raise SpecError(f"{where}: value contains NaN: {_short(value)}")
         return array
 
@@ -127,7 +130,7 @@ class Spec:
         if isinstance(value, np.ndarray):
             if not self._shape_ok(value.shape):
                 return f"computed shape {value.shape}, declared {self!r}"
-            if value.dtype.kind == "f" and np.isnan(value).any():
+            if value.dtype.kind == "f" and _has_nan(value):
                 return "computed a value containing NaN"
             if value.dtype.kind != _KIND[self.dtype] and not (self.dtype == "float" and value.dtype.kind in "iub"):
                 return f"computed an array of {value.dtype}, declared {self!r}"
@@ -143,6 +146,13 @@ class Spec:
 
 _NUMPY = {"float": np.float64, "int": np.int64, "bool": np.bool_}
 _KIND = {"float": "f", "int": "i", "bool": "b"}
+
+
+def _has_nan(array: np.ndarray) -> bool:
+    """True if a float array holds a NaN (one reduction when it does not: a NaN, or +inf and
+    -inf together, make the sum NaN; only then is the exact test run)."""
+    total = np.add.reduce(array, axis=None)
+    return total != total and bool(np.isnan(array).any())
 
 
 def _short(value: Any) -> str:

@@ -88,3 +88,13 @@ def test_unknown_dtype():
 
 def test_repr():
     assert repr(Spec((3,))) == "float(3,)" and repr(Spec((None, 2), "int")) == "int(*, 2)"
+
+
+def test_infinities_are_values_and_nan_is_found_behind_them():
+    spec = Spec((3,))
+    value = spec.coerce(np.array([np.inf, -np.inf, 1.0]), "x")  # the sum is NaN, but no entry is
+    assert np.isinf(value[:2]).all()
+    assert spec.problem(np.array([np.inf, -np.inf, 1.0])) is None
+    assert "NaN" in spec.problem(np.array([1.0, np.nan, 2.0]))
+    with pytest.raises(SpecError, match="NaN"):
+        spec.coerce(np.array([np.inf, np.nan, 0.0]), "x")
