@@ -149,10 +149,10 @@ _KIND = {"float": "f", "int": "i", "bool": "b"}
 
 
 def _has_nan(array: np.ndarray) -> bool:
-    """True if a float array holds a NaN (one reduction when it does not: a NaN, or +inf and
-    -inf together, make the sum NaN; only then is the exact test run)."""
-    total = np.add.reduce(array, axis=None)
-    return total != total and bool(np.isnan(array).any())
+    """True if a float array holds a NaN: its sum of squares is NaN exactly then (infinities
+    square to +inf), and one BLAS dot is cheaper than ``np.isnan(array).any()``."""
+    total = np.vdot(array, array)
+    return total != total
 
 
 def _short(value: Any) -> str:
