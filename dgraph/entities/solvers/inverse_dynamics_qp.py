@@ -17,6 +17,7 @@ s.t. M_u a - (J_c^T T)_u f = -h_u                         floating-base dynamics
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -59,7 +60,12 @@ class QPSolution:
 
 @dataclass(slots=True)
 class _Workspace:
-    """Preallocated matrices and the ProxQP object for one set of active contacts."""
+    """Preallocated matrices and the ProxQP object for one set of active contacts.
+
+    The contacts' friction rows, their bounds and the force regularisation do not change from
+    tick to tick: they are written when the workspace is made, or again when a contact hands
+    over different arrays (``sources`` keeps what was written).
+    """
 
     qp: object
     H: np.ndarray
@@ -69,6 +75,7 @@ class _Workspace:
     C: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
+    sources: list[tuple[object, ...]] = field(default_factory=list)
     initialised: bool = False
 
 
@@ -77,7 +84,9 @@ class InverseDynamicsQP:
     of them unactuated (6 for a free-flyer base), and torque limits ``effort_limit``.
 
     One ProxQP dense object is kept per set of active contacts (the problem's size) and
-    warm-started from the previous solution; matrices are filled in place.
+    warm-started from the previous solution, with the preconditioner of its first solve (the
+    problem's scaling hardly changes between ticks; recomputing it doubles the solve time);
+    matrices are filled in place.
     """
 
     def __init__(self, nv: int, n_unactuated: int, effort_limit: np.ndarray, *, eps_abs: float = 1e-9,
@@ -87,11 +96,12 @@ class InverseDynamicsQP:
         self.effort_limit = np.asarray(effort_limit, dtype=float)
         self.eps_abs, self.max_iterations = eps_abs, max_iterations
         self.acceleration_weight = acceleration_weight
-        self._workspaces: dict[tuple[int, ...], _Workspace] = {}
+        self._diagonal = np.diag_indices(nv)
+        self._workspaces: dict[tuple[object, ...], _Workspace] = {}
 
     # -- assembly ----------------------------------------------------------------------------
     def _workspace(self, contacts: list[ContactConstraint]) -> _Workspace:
-        key = tuple(c.n_forces for c in contacts) + tuple(len(c.friction_lower) for c in contacts)
+        key = tuple((c.name, c.n_forces, len(c.friction_lower)) for c in contacts)
         ws = self._workspaces.get(key)
         if ws is None:
             nf = sum(c.n_forces for c in contacts)
@@ -106,45 +116,51 @@ class InverseDynamicsQP:
             ws = _Workspace(qp, np.zeros((n, n)), np.zeros(n), np.zeros((n_eq, n)), np.zeros(n_eq),
                             np.zeros((n_in, n)), np.zeros(n_in), np.zeros(n_in))
             self._workspaces[key] = ws
+        sources = [(c.friction_matrix, c.friction_lower, c.friction_upper, c.force_weight) for c in contacts]
+        if len(sources) != len(ws.sources) or any(
+                any(a is not b for a, b in zip(new, old, strict=True)) for new, old in zip(sources, ws.sources,
+                                                                                          strict=True)):
+            self._write_constant_rows(ws, contacts)
+            ws.sources = sources
         return ws
+
+    def _write_constant_rows(self, ws: _Workspace, contacts: list[ContactConstraint]) -> None:
+        """Friction rows and bounds, force regularisation."""
+        row, col = 0, self.nv
+        for contact in contacts:
+            k, m = contact.n_forces, len(contact.friction_lower)
+            ws.C[row:row + m, col:col + k] = contact.friction_matrix
+            ws.lower[row:row + m] = np.maximum(contact.friction_lower, -INFINITY)
+            ws.upper[row:row + m] = np.minimum(contact.friction_upper, INFINITY)
+            ws.H[np.arange(col, col + k), np.arange(col, col + k)] = 2.0 * contact.force_weight
+            row, col = row + m, col + k
 
     def assemble(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, tasks: list[TaskEquation],
                  contacts: list[ContactConstraint]) -> _Workspace:
         """Fill the workspace for this tick's problem (see the module docstring)."""
-        nv, nu = self.nv, self.nu
+        nv, nu, na = self.nv, self.nu, self.na
         ws = self._workspace(contacts)
-        H, g, A, b, C, lower, upper = ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper
-        H.fill(0.0)
-        g.fill(0.0)
-        H_aa = H[:nv, :nv]
+        # cost on a: sum_i A_i^T W_i A_i and -A_i^T W_i b_i (times 2: ProxQP minimises x^T H x / 2 + g^T x)
+        hessian, gradient = 2.0 * self.acceleration_weight * np.eye(nv), np.zeros(nv)
         for task in tasks:
-            weighted = task.matrix * task.weight[:, None]
-            H_aa += 2.0 * (task.matrix.T @ weighted)
-            g[:nv] -= 2.0 * (weighted.T @ task.vector)
-        H_aa[np.diag_indices(nv)] += 2.0 * self.acceleration_weight
-        # generalized contact forces J^T T for every contact, side by side: (nv, nf)
-        A.fill(0.0)
-        C.fill(0.0)
-        A[:nu, :nv] = mass_matrix[:nu]
-        b[:nu] = -bias_forces[:nu]
-        C[-self.na:, :nv] = mass_matrix[nu:]
-        row_eq, row_in, col = nu, 0, nv
-        for contact in contacts:
-            k = contact.n_forces
-            forces = slice(col, col + k)
-            generalized = contact.jacobian.T @ contact.force_generator
-            A[:nu, forces] = -generalized[:nu]
-            C[-self.na:, forces] = -generalized[nu:]
-            A[row_eq:row_eq + 6, :nv] = contact.jacobian
-            b[row_eq:row_eq + 6] = contact.motion_rhs
-            m = len(contact.friction_lower)
-            C[row_in:row_in + m, forces] = contact.friction_matrix
-            lower[row_in:row_in + m] = np.maximum(contact.friction_lower, -INFINITY)
-            upper[row_in:row_in + m] = np.minimum(contact.friction_upper, INFINITY)
-            H[forces, forces][np.diag_indices(k)] = 2.0 * contact.force_weight
-            row_eq, row_in, col = row_eq + 6, row_in + m, col + k
-        lower[-self.na:] = -self.effort_limit - bias_forces[nu:]
-        upper[-self.na:] = self.effort_limit - bias_forces[nu:]
+            weighted = task.matrix.T * (2.0 * task.weight)
+            hessian += weighted @ task.matrix
+            gradient -= weighted @ task.vector
+        ws.H[:nv, :nv] = hessian
+        ws.g[:nv] = gradient
+        # dynamics (floating-base rows) and torque rows share [M, -J_c^T T]
+        ws.A[:nu, :nv] = mass_matrix[:nu]
+        ws.b[:nu] = -bias_forces[:nu]
+        ws.C[-na:, :nv] = mass_matrix[nu:]
+        limit = self.effort_limit
+        ws.lower[-na:] = -limit - bias_forces[nu:]
+        ws.upper[-na:] = limit - bias_forces[nu:]
+        if contacts:
+            generalized = np.hstack([c.jacobian.T @ c.force_generator for c in contacts])
+            ws.A[:nu, nv:] = -generalized[:nu]
+            ws.C[-na:, nv:] = -generalized[nu:]
+            ws.A[nu:, :nv] = np.vstack([c.jacobian for c in contacts])
+            ws.b[nu:] = np.concatenate([c.motion_rhs for c in contacts])
         return ws
 
     # -- solving -----------------------------------------------------------------------------
@@ -153,12 +169,12 @@ class InverseDynamicsQP:
         """Assemble, solve, and recover ``tau``; never raises on a numerical failure."""
         start = time.perf_counter()
         ws = self.assemble(mass_matrix, bias_forces, tasks, contacts)
-        finite = all(np.isfinite(m).all() for m in (ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper))
+        finite = all(math.isfinite(np.vdot(m, m)) for m in (ws.H, ws.g, ws.A, ws.b, ws.C[-self.na:], ws.lower))
         status, iterations = NOT_FINITE, 0
         if finite:
             qp = ws.qp
             if ws.initialised:
-                qp.update(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper)
+                qp.update(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper, update_preconditioner=False)
             else:
                 qp.init(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper)
                 ws.initialised = True
