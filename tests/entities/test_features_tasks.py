@@ -142,5 +142,5 @@ def test_task_gain_errors_and_critical_damping():
     with pytest.raises(dg.DGraphError, match=r"task\.kp.*scalar or 3 values"):
         task.equation(0)
     task.kp.set(-1.0)
-    with pytest.raises(dg.DGraphError, match="gains must be >= 0"):
+    with pytest.raises(dg.DGraphError, match=r"task\.kp must be >= 0"):
         task.equation(0)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
 class ContactConstraint:
     """A contact's rows for the solver (``k`` force variables, ``nv`` accelerations).
 
@@ -16,7 +16,8 @@ class ContactConstraint:
       hence the generalized force ``jacobian^T force_generator f``;
     - friction and normal-force bounds: ``friction_lower <= friction_matrix f <= friction_upper``;
     - ``force_weight``: regularisation ``force_weight ||f||^2`` in the cost;
-    - ``rotation``: the contact frame's orientation in the world (to report world wrenches).
+    - ``rotation``: the contact frame's orientation in the world (to report world wrenches);
+    - ``error``: the contact's placement error that ``motion_rhs`` corrects.
     """
 
     name: str
@@ -29,6 +30,7 @@ class ContactConstraint:
     friction_upper: np.ndarray
     force_weight: float
     rotation: np.ndarray
+    error: np.ndarray
 
     @property
     def n_forces(self) -> int:

@@ -63,7 +63,7 @@ class Contact6d(dg.Entity):
     rigid constraint ``J a + J_dot v = 0``), ``active`` (bool; commands ``activate`` /
     ``deactivate`` set it; an inactive contact adds nothing to the QP).
     State: ``anchor`` (the anchored placement, ``None`` while inactive).
-    Outputs: ``contact`` (:class:`ContactConstraint`), ``error`` (``e``, 6).
+    Outputs: ``contact`` (:class:`ContactConstraint`, with ``e``), ``error`` (``e``, 6).
     """
 
     has_state = True
@@ -125,26 +125,24 @@ class Contact6d(dg.Entity):
         anchor = self.anchor(t)
         return anchor if anchor is not None else self.robot(t).frame_placement(self._frame(self.robot(t)))
 
-    @dg.output(shape=(6,), depends=("robot", "anchor"))
-    def error(self, t: int) -> np.ndarray:
-        """``e = [R^T (p - p_a), log3(R_a^T R)]`` (local frame)."""
-        state = self.robot(t)
-        placement, anchor = state.frame_placement(self._frame(state)), self._anchor(t)
-        rotation = placement.rotation
-        return np.concatenate([rotation.T @ (placement.translation - anchor.translation),
-                               pin.log3(anchor.rotation.T @ rotation)])
-
-    @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "anchor", "error"))
+    @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "anchor"))
     def contact(self, t: int) -> ContactConstraint:
         """Motion rows, force generator and friction rows at ``t``."""
         state = self.robot(t)
         frame = self._frame(state)
-        twist = state.frame_velocity(frame, LOCAL)
-        desired = -np.asarray(self.kp(t)) * self.error(t) - np.asarray(self.kd(t)) * twist
+        placement, anchor = state.frame_placement(frame), self._anchor(t)
+        rotation = placement.rotation
+        error = np.concatenate([rotation.T @ (placement.translation - anchor.translation),
+                                pin.log3(anchor.rotation.T @ rotation)])
+        desired = -self.kp(t) * error - self.kd(t) * state.frame_velocity(frame, LOCAL)
         return ContactConstraint(self.name, bool(self.active(t)), state.frame_jacobian(frame, LOCAL),
                                  desired - state.frame_drift(frame, LOCAL), self._generator, self._friction,
-                                 self._lower, self._upper, self.force_weight,
-                                 state.frame_placement(frame).rotation)
+                                 self._lower, self._upper, self.force_weight, rotation, error)
+
+    @dg.output(shape=(6,), depends=("contact",))
+    def error(self, t: int) -> np.ndarray:
+        """``e = [R^T (p - p_a), log3(R_a^T R)]`` (local frame)."""
+        return self.contact(t).error
 
     def prepare_state(self, t: int) -> None:
         """Anchor at the first active tick; forget the anchor when inactive."""

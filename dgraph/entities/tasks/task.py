@@ -52,16 +52,30 @@ class Task(dg.Entity):
         """Declare ``kd`` unless the damping is critical."""
         if not self.critical_damping:
             self.declare("kd", dg.Input(default=0.0, doc="derivative gain (scalar or per row)"))
+        self._vectors: dict[str, tuple[object, np.ndarray]] = {}
+
+    def _vector(self, name: str, size: int, t: int) -> np.ndarray:
+        """The input ``name`` as ``size`` values >= 0, converted once per new value: constants and
+        slowly changing signals are the same object tick after tick."""
+        value = getattr(self, name)(t)
+        cached = self._vectors.get(name)
+        if cached is not None and cached[0] is value and len(cached[1]) == size:
+            return cached[1]
+        vector = _broadcast(self, name, value, size, t)
+        if (vector < 0).any():
+            raise dg.SpecError(f"{self.name}.{name} must be >= 0 at tick {t}", entity=self.name, signal=name)
+        self._vectors[name] = (value, vector)
+        return vector
 
     def _gains(self, size: int, t: int) -> tuple[np.ndarray, np.ndarray]:
-        kp = _broadcast(self, "kp", self.kp(t), size, t)
+        kp = self._vector("kp", size, t)
         if self.critical_damping:
-            kd = 2.0 * np.sqrt(np.maximum(kp, 0.0))
-        else:
-            kd = _broadcast(self, "kd", self.kd(t), size, t)
-        if (kp < 0).any() or (kd < 0).any():
-            raise dg.SpecError(f"{self.name}: gains must be >= 0 at tick {t}", entity=self.name, signal="kp")
-        return kp, kd
+            cached = self._vectors.get("critical")
+            if cached is None or cached[0] is not kp:
+                cached = (kp, 2.0 * np.sqrt(kp))
+                self._vectors["critical"] = cached
+            return kp, cached[1]
+        return kp, self._vector("kd", size, t)
 
     def _feature(self, t: int) -> FeatureValue:
         value = self.feature(t)
@@ -81,7 +95,5 @@ class Task(dg.Entity):
     def equation(self, t: int) -> TaskEquation:
         """``A = J``, ``b = x_ddot_des - J_dot v``, per-row weights."""
         f = self._feature(t)
-        weight = _broadcast(self, "weight", self.weight(t), len(f.error), t)
-        if (weight < 0).any():
-            raise dg.SpecError(f"{self.name}.weight must be >= 0 at tick {t}", entity=self.name, signal="weight")
+        weight = self._vector("weight", len(f.error), t)
         return TaskEquation(f.jacobian, self.desired_acceleration(t) - f.drift, weight)
