@@ -12,9 +12,9 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e ".[test]"
 	touch $(STAMP)
 
-## demo: run the main demo graph headless, writing a Rerun recording under out/
+## demo: TALOS sways 20 s in MuJoCo (headless), writing out/talos_sway.rrd and .npz
 demo: $(STAMP)
-	$(BIN)/dgraph run graphs/pd_double_integrator.yaml --rerun save out/pd_double_integrator.rrd --npz out/pd_double_integrator.npz
+	$(BIN)/dgraph run graphs/talos_sway.yaml --rerun save out/talos_sway.rrd --npz out/talos_sway.npz
 
 ## test: lint, then the whole test suite
 test: $(STAMP) lint
@@ -23,10 +23,13 @@ test: $(STAMP) lint
 lint: $(STAMP)
 	$(BIN)/ruff check .
 
-## bench: signal-overhead benchmark (installs the Drake peer in .venv-bench)
+## bench: signal overhead against Drake, TALOS tick against TSID 1.10, ID formulations (installs the peers)
 bench: $(STAMP)
 	bash bench/setup_peer.sh
 	$(BIN)/python bench/signal_overhead.py --peer .venv-bench/bin/python
+	bash bench/setup_tsid.sh
+	$(BIN)/python bench/talos_tick.py --json out/talos_tick.json
+	$(BIN)/python bench/id_formulations.py
 
 clean:
-	rm -rf $(VENV) .venv-bench out .pytest_cache .hypothesis
+	rm -rf $(VENV) .venv-bench .venv-tsid out .pytest_cache .hypothesis

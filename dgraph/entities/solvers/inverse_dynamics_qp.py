@@ -4,7 +4,8 @@ Variables ``x = [a, f]``: generalized accelerations ``a`` (nv) and the force var
 of the active contacts. Torques are not variables: the actuated rows of the dynamics give
 them back, ``tau = M_j a + h_j - (J_c^T T)_j f`` (thesis Eq. 2.4), so the QP keeps only the
 ``n_u`` unactuated (floating-base) rows as equalities. ``bench/id_formulations.py`` compares
-this with ``tau`` kept as variables (82 instead of 62 variables for TALOS on two feet).
+this with ``tau`` kept as variables (94 instead of 62 variables for TALOS on two feet; the
+solve takes twice as long, docs/control.md).
 
 ```
 min  sum_i ||A_i a - b_i||^2_{W_i} + sum_c w_c ||f_c||^2 + eps ||a||^2
