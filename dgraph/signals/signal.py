@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from dgraph.errors import ComputeError, DGraphError, PlugError, SpecError, UnpluggedInputError
 from dgraph.signals.clock import Clock
-from dgraph.signals.spec import ShapeDecl, Spec, resolve_shape
+from dgraph.signals.spec import ShapeDecl, Spec, exact_float_copy, resolve_shape
 
 if TYPE_CHECKING:
     from dgraph.entity import Entity
@@ -324,7 +324,8 @@ class State(Output):
 
     def stage(self, value: Any) -> None:
         """Check and hold ``value`` as the next state (raises :class:`SpecError` here, not at commit)."""
-        self._staged = _coerce(self, value)
+        staged = exact_float_copy(self.spec, value)  # the common case, without naming the signal
+        self._staged = _coerce(self, value) if staged is None else staged
 
     def commit(self, t: int) -> None:
         """Publish the staged value as the state at tick ``t``; invalidate everything downstream."""

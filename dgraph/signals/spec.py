@@ -79,6 +79,9 @@ class Spec:
         """
         if self.dtype == "object":
             return value
+        array = exact_float_copy(self, value)
+        if array is not None:
+            return array
         try:
             if self.shape == () or (self.shape is None and np.ndim(value) == 0):
                 return self._coerce_scalar(value, where)
@@ -121,6 +124,9 @@ class Spec:
         """What is wrong with a computed value (type, shape, NaN), or None. Cheap when fine."""
         if self.dtype == "object":
             return None
+        if (type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == self.shape
+                and self.dtype == "float"):  # the common case: the general path below, in short
+            return "computed a value containing NaN" if _has_nan(value) else None
         if type(value) is float and self.dtype == "float":
             if value != value:
                 return "computed NaN"
@@ -146,6 +152,19 @@ class Spec:
 
 _NUMPY = {"float": np.float64, "int": np.int64, "bool": np.bool_}
 _KIND = {"float": "f", "int": "i", "bool": "b"}
+_FLOAT64 = np.dtype(np.float64)
+
+
+def exact_float_copy(spec: Spec, value: Any) -> np.ndarray | None:
+    """The fast path of :meth:`Spec.coerce` for the common case: a float64 array of exactly the
+    declared (non-scalar) shape of a float spec, without NaN, gives a copy; anything else (even
+    an equivalent value) gives None, and the general path converts it or raises."""
+    if (type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == spec.shape
+            and spec.dtype == "float" and value.ndim):
+        array = value.copy()
+        if not _has_nan(array):
+            return array
+    return None
 
 
 def _has_nan(array: np.ndarray) -> bool:
