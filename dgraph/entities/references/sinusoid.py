@@ -41,6 +41,7 @@ class Sinusoid(dg.Entity):
         self._phase = np.broadcast_to(self.phase, self.value_shape)
         self._offset = np.broadcast_to(self.offset, self.value_shape)
         self._scalar = self.value_shape == ()
+        self._last: tuple[int, tuple[Any, Any, Any]] | None = None
 
     def _envelope(self, s: float) -> tuple[float, float, float]:
         """``e, e_dot, e_ddot`` of the fade-in at time ``s``."""
@@ -50,30 +51,31 @@ class Sinusoid(dg.Entity):
         return (x**3 * (10 - 15 * x + 6 * x * x), 30 * x * x * (1 - x) ** 2 / self.ramp,
                 60 * x * (1 - x) * (1 - 2 * x) / self.ramp**2)
 
-    def _wave(self, t: int, derivative: int) -> Any:
+    def _waves(self, t: int) -> tuple[Any, Any, Any]:
+        """Position, velocity and acceleration at tick ``t``, computed together once per tick."""
+        if self._last is not None and self._last[0] == t:
+            return self._last[1]
         s = t * self.dt
         arg = self._omega * s + self._phase
         e, de, dde = self._envelope(s)
         sin, cos = self.amplitude * np.sin(arg), self.amplitude * self._omega * np.cos(arg)
-        if derivative == 0:
-            value = self._offset + e * sin
-        elif derivative == 1:
-            value = e * cos + de * sin
-        else:
-            value = -e * self._omega**2 * sin + 2 * de * cos + dde * sin
-        return float(value) if self._scalar else value
+        waves = (self._offset + e * sin, e * cos + de * sin, -e * self._omega**2 * sin + 2 * de * cos + dde * sin)
+        if self._scalar:
+            waves = tuple(float(w) for w in waves)
+        self._last = (t, waves)
+        return waves
 
     @dg.output(shape=lambda self: self.value_shape, depends=("t",))
     def output(self, t: int) -> Any:
         """Position: ``offset + e(s) A sin(w s + phi)``."""
-        return self._wave(t, 0)
+        return self._waves(t)[0]
 
     @dg.output(shape=lambda self: self.value_shape, depends=("t",))
     def velocity(self, t: int) -> Any:
         """Velocity: its time derivative."""
-        return self._wave(t, 1)
+        return self._waves(t)[1]
 
     @dg.output(shape=lambda self: self.value_shape, depends=("t",))
     def acceleration(self, t: int) -> Any:
         """Acceleration: its second time derivative."""
-        return self._wave(t, 2)
+        return self._waves(t)[2]
