@@ -44,7 +44,7 @@ class RobotModel(dg.Entity):
     joints), ``v`` (nv: base linear and angular velocity in the base frame, then joints).
 
     ``state`` runs the Pinocchio pass once per tick (:class:`RobotState`: ``computeAllTerms``,
-    then kinematics at ``a = 0`` for the drifts); every other output, and every feature, task
+    which also gives the drifts at ``a = 0``); every other output, and every feature, task
     and contact plugged to ``state``, reads from it. Outputs (thesis Eq. 2.1–2.4, 2.32):
 
     - ``mass_matrix`` ``M(q)`` (nv x nv), ``bias_forces`` ``h = C(q, v) v + g(q)`` (nv), so

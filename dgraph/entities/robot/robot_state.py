@@ -27,16 +27,15 @@ class RobotState:
     """Kinematics and dynamics of ``model`` at ``(q, v)``, computed once.
 
     The constructor runs ``computeAllTerms`` (mass matrix, nonlinear effects, joint Jacobians,
-    CoM and its Jacobian, centroidal momentum matrix), then ``forwardKinematics(q, v, 0)`` and
-    the CoM at that acceleration level, so that accelerations read at ``a = 0`` are the drifts ``J_dot v``.
+    CoM and its Jacobian, centroidal momentum matrix). Its forward pass leaves in ``data.a`` the
+    body accelerations at ``a = 0``, so frame accelerations read from it, and the CoM
+    acceleration computed from it, are the drifts ``J_dot v`` (checked by finite differences).
     Frame quantities are computed on request from that data (a few µs each).
     """
 
     def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray):
         self.model, self.data, self.q, self.v = model, data, q, v
-        zero = np.zeros(model.nv)
-        pin.computeAllTerms(model, data, q, v)
-        pin.forwardKinematics(model, data, q, v, zero)
+        pin.computeAllTerms(model, data, q, v)  # also leaves data.a = the accelerations at a = 0
         pin.updateFramePlacements(model, data)
         pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
         self.mass_matrix = data.M.copy()  # Pinocchio 4 fills both triangles (checked by a test)
