@@ -70,6 +70,10 @@ def check_common(graph: dg.Graph, data: dict[str, np.ndarray], residuals: list[f
     limits = graph["robot"].pin_model.effortLimit[6:]
     assert (np.abs(data["solver.tau"]) <= limits + 1e-6).all()
     assert max(residuals) < 1e-6
+    for entity in graph:  # the cache: no output computed more than once per tick
+        for out in entity.outputs.values():
+            assert getattr(out, "count", 0) <= graph.t + 1, out.full_name
+    assert graph.t <= graph["robot"].state.count <= graph.t + 1  # one Pinocchio pass per tick
 
 
 def test_standing_10s_with_the_estimator_in_the_loop(standing):
