@@ -149,7 +149,6 @@ class MujocoDevice(dg.Device):
         self.data = mujoco.MjData(m)
         self._saved = np.zeros(mujoco.mj_stateSize(m, _STATE))
         self._pending = False
-        self._warnings = [self.data.warning[int(w)] for w in _BAD_WARNINGS]
         self._warning_counts = [0, 0, 0]
         jm = self.joint_map
         self._qpos_joints, self._qvel_joints = jm.qpos_joints, jm.qvel_joints
@@ -163,15 +162,22 @@ class MujocoDevice(dg.Device):
         expected = [start + 6 * i + o for i in range(len(FT_SENSORS)) for o in (0, 3)]
         if [a for k in FT_SENSORS for a in (sensors.force[k], sensors.torque[k])] != expected:
             raise dg.DGraphError(f"{self.name}: force/torque sensors are not laid out as expected", entity=self.name)
-        self._ft_block = slice(start, start + 6 * len(FT_SENSORS))
-        self._imu_quat = [sensors.imu_quat + i for i in (1, 2, 3, 0)]
-        self._imu_gyro = slice(sensors.imu_gyro, sensors.imu_gyro + 3)
-        self._imu_acc = slice(sensors.imu_accelerometer, sensors.imu_accelerometer + 3)
+        # one gather of sensordata per tick: IMU quaternion (xyzw), gyro, accelerometer, then the
+        # F/T block (force then torque of each sensor, in FT_SENSORS order)
+        self._sensor_index = np.concatenate([
+            sensors.imu_quat + np.array([1, 2, 3, 0]), sensors.imu_gyro + np.arange(3),
+            sensors.imu_accelerometer + np.arange(3), start + np.arange(6 * len(FT_SENSORS))])
+        self._ft_parts = [(state, slice(10 + 6 * i, 16 + 6 * i)) for i, state in enumerate(self._ft_states)]
         self._base_z = int(self.joint_map.qpos_index[2])
         # views on the MjData buffers (fixed for its lifetime; mj_setState writes into them)
         d = self.data
         self._qpos, self._qvel, self._ctrl, self._xfrc = d.qpos, d.qvel, d.ctrl, d.xfrc_applied
         self._sensordata, self._actuator_force = d.sensordata, d.actuator_force
+        self._warning_numbers, self._bad_warnings = d.warning.number, np.array([int(w) for w in _BAD_WARNINGS])
+        # R_WB^T (the base's xmat, transposed): MuJoCo sets a free body's orientation from its
+        # qpos quaternion (normalised) in mj_kinematics, which mj_step1 and mj_forward run
+        self._base_rt = d.xmat[jm.base_body].reshape(3, 3).T
+        self._qpos_index, self._qvel_index = jm.qpos_index, jm.qvel_index
         bodies = self.sim.robot_bodies  # a slice
         self._cfrc_robot = d.cfrc_ext[bodies, 3:]
         self._xfrc_robot = d.xfrc_applied[bodies, :3]
@@ -180,6 +186,7 @@ class MujocoDevice(dg.Device):
         self._torque_mode = self.control_mode == "torque"
         self._kp, self._kd = self._gains["kp"], self._gains["kd"]
         self._timestep = float(m.opt.timestep)
+        self._fallen_staged = False
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._frames: list[np.ndarray] = []
         self._next_frame = 0
@@ -204,9 +211,10 @@ class MujocoDevice(dg.Device):
         mujoco.mj_forward(m, d)
         self._pending = False
         self._sync_warnings()
-        self._stage_all(self._contact_force())
+        self._stage_all(self._contact_force(), everything=True)
         for sig in self._states():
             sig.commit(0)
+        self._fallen_staged = False
 
     def _states(self) -> list[dg.State]:
         return [s for s in self.ports.values() if isinstance(s, dg.State)]
@@ -234,13 +242,16 @@ class MujocoDevice(dg.Device):
         if dt != self._timestep:
             m.opt.timestep = self._timestep = dt
         tau = self._torque(t)
-        wrenches = [(body, self.signal(port)(t)) for body, port in self._wrenches]
+        wrenches = [(body, self.signal(port)(t)) for body, port in self._wrenches] if self._wrenches else ()
         for (_, port), (_, wrench) in zip(self._wrenches, wrenches, strict=True):
             if not np.isfinite(wrench).all():
                 raise dg.DGraphError(f"{self.name}: non-finite {port} at tick {t}", entity=self.name, signal=port)
         mujoco.mj_getState(m, d, self._saved, _STATE)
         self._pending = True
-        self._ctrl[:] = tau if self._ctrl_identity else tau[self._ctrl_index]
+        if self._ctrl_identity:
+            self._ctrl[:] = tau
+        else:
+            np.take(tau, self._ctrl_index, out=self._ctrl)
         for body, wrench in wrenches:
             self._xfrc[body] = wrench
         mujoco.mj_step2(m, d)
@@ -269,7 +280,9 @@ class MujocoDevice(dg.Device):
         self.joint_torque.commit(t_next)
         self.contact_force_total.commit(t_next)
         self.sim_time.commit(t_next)
-        self.fallen.commit(t_next)
+        if self._fallen_staged:
+            self.fallen.commit(t_next)
+            self._fallen_staged = False
         self._pending = False
 
     def _restore(self) -> None:
@@ -281,19 +294,18 @@ class MujocoDevice(dg.Device):
         self._pending = False
 
     def _sync_warnings(self) -> None:
-        self._warning_counts = [w.number for w in self._warnings]
+        self._warning_counts = self._warning_numbers[self._bad_warnings].tolist()
 
     def _check(self, t: int) -> None:
         """Raise if MuJoCo diverged: non-finite state or a bad qpos/qvel/qacc warning."""
         qpos, qvel = self._qpos, self._qvel
-        counts = [w.number for w in self._warnings]
+        counts = self._warning_numbers[self._bad_warnings].tolist()
         # NaN or inf make the squared norms non-finite (so do values beyond 1e154: diverged too)
         finite = math.isfinite(np.dot(qpos, qpos) + np.dot(qvel, qvel))
         if finite and counts == self._warning_counts:
             return
-        problems = [f"{mujoco.mjtWarning(int(w)).name[7:]} (index {s.lastinfo})"
-                    for w, s, n, n0 in zip(_BAD_WARNINGS, self._warnings, counts, self._warning_counts, strict=True)
-                    if n != n0]
+        problems = [f"{mujoco.mjtWarning(int(w)).name[7:]} (index {self.data.warning[int(w)].lastinfo})"
+                    for w, n, n0 in zip(_BAD_WARNINGS, counts, self._warning_counts, strict=True) if n != n0]
         if not finite:
             problems.append("non-finite qpos/qvel")
         self._warning_counts = counts
@@ -301,25 +313,36 @@ class MujocoDevice(dg.Device):
                              "the state at this tick is kept (lower the gains, the time step or the applied "
                              "wrenches)", entity=self.name)
 
-    def _stage_all(self, contact_force: np.ndarray) -> bool:
-        """Stage every state from the MuJoCo data (Pinocchio conventions); returns ``fallen``."""
-        jm, sensordata, qpos, qvel = self.joint_map, self._sensordata, self._qpos, self._qvel
-        self.q.stage(jm.q_from_qpos(qpos))
-        self.v.stage(jm.v_from_qvel(qpos, qvel))
-        self.imu_orientation.stage(sensordata[self._imu_quat])
-        self.imu_angular_velocity.stage(sensordata[self._imu_gyro])
-        self.imu_linear_acceleration.stage(sensordata[self._imu_acc])
-        self.encoder_position.stage(qpos[self._qpos_joints])
-        self.encoder_velocity.stage(qvel[self._qvel_joints])
-        # MuJoCo reports the wrench the parent exerts on the child subtree: negate it
-        ft = -sensordata[self._ft_block]
-        for i, state in enumerate(self._ft_states):
-            state.stage(ft[6 * i:6 * i + 6])
+    def _stage_all(self, contact_force: np.ndarray, everything: bool = False) -> bool:
+        """Stage every state from the MuJoCo data (Pinocchio conventions); returns ``fallen``.
+
+        ``fallen`` is staged only when it changes (or with ``everything``): its ``time`` is the
+        tick of the change, like the estimator's contact flags. A few gathers with precomputed
+        index arrays; the encoder and F/T states are views of them (``stage`` copies).
+        """
+        qpos = self._qpos
+        q = qpos[self._qpos_index]                      # JointMap.q_from_qpos
+        v = self._qvel[self._qvel_index]                # JointMap.v_from_qvel: the base linear
+        v[:3] = self._base_rt.dot(v[:3])                # velocity to the base frame, R_WB^T v
+        sensors = self._sensordata[self._sensor_index]
+        ft = sensors[10:]
+        np.negative(ft, out=ft)  # MuJoCo reports the wrench the parent exerts on the child subtree
+        self.q.stage(q)
+        self.v.stage(v)
+        self.imu_orientation.stage(sensors[0:4])
+        self.imu_angular_velocity.stage(sensors[4:7])
+        self.imu_linear_acceleration.stage(sensors[7:10])
+        self.encoder_position.stage(q[7:])
+        self.encoder_velocity.stage(v[6:])
+        for state, part in self._ft_parts:
+            state.stage(sensors[part])
         self.joint_torque.stage(self._actuator_force[self._actuated_index])
         self.contact_force_total.stage(contact_force)
         self.sim_time.stage(self.data.time)
         fallen = bool(qpos[self._base_z] < self.fall_height)
-        self.fallen.stage(fallen)
+        self._fallen_staged = everything or fallen != self.fallen.value
+        if self._fallen_staged:
+            self.fallen.stage(fallen)
         return fallen
 
     def _contact_force(self) -> np.ndarray:
