@@ -151,3 +151,25 @@ def test_wrong_inputs_are_named():
     with pytest.raises(Exception, match=r"solver\.com_task.*expected a TaskEquation"):
         graph["solver"].tau(0)
     assert len(CONTACTS) == 2
+
+
+def test_validation_names_a_missing_frame_and_a_model_size_mismatch(tmp_path):
+    import dgraph as dg
+    from dgraph.entities.contacts import Contact6d
+    from dgraph.entities.robot import RobotModel
+    from dgraph.entities.solvers import InverseDynamicsSolver
+
+    graph = dg.Graph(dt=0.001)
+    graph.add(RobotModel("robot", model="talos_legs"))
+    graph.add(Contact6d("foot", frame="left_sole"))
+    graph.add(InverseDynamicsSolver("solver", model="talos"))
+    graph.plug("robot.state", "foot.robot")
+    graph.plug("robot.state", "solver.robot")
+    problems = "\n".join(graph.problems())
+    assert "foot.robot has no frame 'left_sole'" in problems
+    assert "solver: its model has nv = 38 but the robot plugged into solver.robot has nv = 18" in problems
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("dt: 0.001\nentities:\n  robot: {type: RobotModel}\n"
+                   "  foot: {type: Contact6d, params: {frame: left_sole}}\nplugs: [robot.state -> foot.robot]\n")
+    with pytest.raises(dg.GraphFileError, match=r"bad.yaml:4 \[entities.foot\].*no frame 'left_sole'"):
+        dg.load(str(bad)).validate()

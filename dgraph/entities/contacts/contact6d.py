@@ -7,7 +7,7 @@ import pinocchio as pin
 
 import dgraph as dg
 from dgraph.entities.contacts.constraint import ContactConstraint
-from dgraph.entities.robot.robot_state import LOCAL, RobotState
+from dgraph.entities.robot.robot_state import LOCAL, RobotState, frame_problems
 
 
 def corner_positions(front: float, back: float, half_width: float) -> np.ndarray:
@@ -110,6 +110,10 @@ class Contact6d(dg.Entity):
     def deactivate(self) -> None:
         """Remove the contact from the QP."""
         self.active.set(False)
+
+    def check(self) -> list[str]:
+        """The frame must exist in the plugged robot model."""
+        return frame_problems(self.robot, [self.frame])
 
     def _frame(self, state: RobotState) -> int:
         if self._frame_id is None:

@@ -7,7 +7,7 @@ import pinocchio as pin
 
 import dgraph as dg
 from dgraph.entities.features.feature import Feature, FeatureValue, parse_mask
-from dgraph.entities.robot.robot_state import WORLD, RobotState
+from dgraph.entities.robot.robot_state import WORLD, RobotState, frame_problems
 
 
 def orientation_error(rotation: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -46,6 +46,10 @@ class FramePose(Feature):
         self.rows = parse_mask(self, self.mask, 6)
         self.size = 6 if self.rows is None else len(self.rows)
         self._frame_id: int | None = None
+
+    def check(self) -> list[str]:
+        """The frame must exist in the plugged robot model."""
+        return frame_problems(self.robot, [self.frame])
 
     def _resolve(self, state: RobotState) -> int:
         if self._frame_id is None:

@@ -6,7 +6,7 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.features.feature import Feature, FeatureValue
-from dgraph.entities.robot.robot_state import RobotState, load_model
+from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
 
 
 @dg.register
@@ -32,6 +32,7 @@ class JointPosture(Feature):
     def configure(self) -> None:
         """Resolve the joints and declare the inputs sized by them."""
         model = load_model(self.model)
+        self.nv = model.nv
         names = list(self.joints) or [model.names[j] for j in range(1, model.njoints) if model.joints[j].nv == 1]
         self.q_index, self.v_index = [], []
         for name in names:
@@ -51,6 +52,13 @@ class JointPosture(Feature):
         self.declare("reference_velocity", dg.Input(shape=(self.size,), default=np.zeros(self.size), doc="v_j*"))
         self.declare("reference_acceleration", dg.Input(shape=(self.size,), default=np.zeros(self.size),
                                                         doc="a_j*"))
+
+    def check(self) -> list[str]:
+        """The plugged robot model must be the size of ``model``."""
+        model = plugged_model(self.robot)
+        if model is not None and model.nv != self.nv:
+            return [f"its model has nv = {self.nv} but the plugged robot has nv = {model.nv}"]
+        return []
 
     def _named_configuration(self, model: object) -> np.ndarray | None:
         if not self.reference_configuration:

@@ -117,6 +117,21 @@ class RobotState:
         return pin.getFrameAcceleration(self.model, self.data, frame, ref).vector
 
 
+def plugged_model(robot_input: Any) -> pin.Model | None:
+    """The Pinocchio model of the RobotModel whose ``state`` feeds ``robot_input`` (or None)."""
+    source = robot_input.source
+    return getattr(source.entity, "pin_model", None) if source is not None else None
+
+
+def frame_problems(robot_input: Any, frames: list[str]) -> list[str]:
+    """Problems for a graph's validation: frames missing from the plugged robot's model."""
+    model = plugged_model(robot_input)
+    if model is None:
+        return []
+    return [f"the robot model plugged into {robot_input.full_name} has no frame {f!r}" for f in frames
+            if not model.existFrame(f)]
+
+
 def homogeneous(placement: pin.SE3) -> np.ndarray:
     """The 4 x 4 homogeneous matrix of a placement."""
     return placement.homogeneous.copy()

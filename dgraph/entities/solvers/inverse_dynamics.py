@@ -6,7 +6,7 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.contacts.constraint import ContactConstraint
-from dgraph.entities.robot.robot_state import RobotState, load_model
+from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
 from dgraph.entities.solvers.inverse_dynamics_qp import SOLVED, InverseDynamicsQP, QPSolution
 from dgraph.entities.tasks.equation import TaskEquation
 
@@ -74,6 +74,14 @@ class InverseDynamicsSolver(dg.Entity):
         """Collect the task and contact inputs."""
         self._task_inputs = [getattr(self, n) for n in self.tasks]
         self._contact_inputs = [getattr(self, n) for n in self.contacts]
+
+    def check(self) -> list[str]:
+        """The plugged robot model must be the size of ``model``."""
+        model = plugged_model(self.robot)
+        if model is not None and model.nv != self.nv:
+            return [f"its model has nv = {self.nv} but the robot plugged into {self.robot.full_name} has nv = "
+                    f"{model.nv}"]
+        return []
 
     def _read(self, t: int) -> tuple[list[TaskEquation], list[ContactConstraint]]:
         tasks = [inp(t) for inp in self._task_inputs]
