@@ -15,7 +15,6 @@ from dgraph.entities.estimators.leg_odometry import (
     frame_id,
     load_model,
     matrix_to_quat,
-    quat_to_matrix,
     standing_configuration,
 )
 
@@ -25,13 +24,11 @@ class Estimate:
 
     __slots__ = ("anchors", "base_velocity_world", "contacts", "next_position", "next_velocity", "q", "v")
 
-    def __init__(self, **values: Any):
-        for key, value in values.items():
-            setattr(self, key, value)
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    def __init__(self, q: np.ndarray, v: np.ndarray, contacts: list[bool], anchors: list[np.ndarray | None],
+                 base_velocity_world: np.ndarray, next_velocity: np.ndarray, next_position: np.ndarray):
+        self.q, self.v, self.contacts, self.anchors = q, v, contacts, anchors
+        self.base_velocity_world = base_velocity_world
+        self.next_velocity, self.next_position = next_velocity, next_position
 
 
 @dg.register
@@ -154,6 +151,8 @@ class FloatingBaseEstimator(dg.Entity):
         if self.q0 is not None and self.q0.shape != (self.nq,):
             raise dg.ParamError(f"{entity}: q0 has shape {self.q0.shape}, expected ({self.nq},)", entity=self.name)
         self._kinematics = RelativeKinematics(model, dict.fromkeys([*self._foot, *self._ft, self._imu]))
+        self._pin = self._kinematics._pin
+        self._lwa = self._kinematics._lwa
         self._gravity = np.array(model.gravity.linear, dtype=float)
 
     def setup(self) -> None:
@@ -182,56 +181,69 @@ class FloatingBaseEstimator(dg.Entity):
     def estimate(self, t: int) -> Any:
         """Everything estimated at ``t`` (an ``Estimate``: q, v, contacts, anchors, next states)."""
         q_j, qd_j = self.encoder_position(t), self.encoder_velocity(t)
-        frames = self._kinematics.update(q_j, qd_j)
-        imu = frames[self._imu]
-        r_wi = quat_to_matrix(self.imu_orientation(t))
-        r_wb = r_wi @ imu.rotation.T                                        # (1)
-        w_b = imu.rotation @ self.imu_angular_velocity(t) - imu.angular     # (2)
-        w_w = r_wb @ w_b
+        pin, kin, lwa = self._pin, self._kinematics, self._lwa
+        model, data = kin.model, kin.data
+        kin.forward(q_j, qd_j)  # frames relative to the base, in B (see RelativeKinematics)
+        imu = pin.updateFramePlacement(model, data, self._imu)
+        imu_motion = pin.getFrameVelocity(model, data, self._imu, lwa)
+        left, right = self._foot
+        # rows: r_BF_left, r_BF_right, r_BI, then their velocities rd_BF_left, rd_BF_right, rd_BI
+        frames = np.array([pin.updateFramePlacement(model, data, left).translation,
+                           pin.updateFramePlacement(model, data, right).translation, imu.translation,
+                           pin.getFrameVelocity(model, data, left, lwa).linear,
+                           pin.getFrameVelocity(model, data, right, lwa).linear, imu_motion.linear])
+        r_bi = imu.rotation
 
-        forces, contacts, feet_w = [], [], []
+        quat = pin.Quaternion(self.imu_orientation(t))  # coefficients x, y, z, w
+        r_wi = quat.normalized().toRotationMatrix()
+        r_wb = r_wi.dot(r_bi.T)                                             # (1)
+        w_b = r_bi.dot(self.imu_angular_velocity(t)) - imu_motion.angular  # (2)
+        # w_W x (R_WB r) + R_WB rd = R_WB (w_B x r + rd): velocities relative to the base in B
+        # (rows: r^T S(w_B)^T = (w_B x r)^T), then every row rotated to the world at once
+        frames[3:] += frames[:3].dot(pin.skew(w_b).T)
+        world = frames.dot(r_wb.T)  # R_WB r_BF_k, R_WB r_BI, the feet's terms of (5), the lever arm
+        vertical = r_wb[2]                                                  # e_z in B (a row of R_WB)
+
+        forces, contacts, anchored = [0.0, 0.0], [False, False], [False, False]
         for k in range(2):                                                  # (3)
-            wrench = self._ft_in[k](t)
-            f_n = float(r_wb[2] @ (frames[self._ft[k]].rotation @ wrench[:3]))
-            anchored = bool(self._anchored[k](t))
-            forces.append(f_n)
-            contacts.append(contact_hysteresis(f_n, anchored, self.contact_force_on, self.contact_force_off))
-            feet_w.append(r_wb @ frames[self._foot[k]].translation)         # R_WB r_BF
+            force = self._ft_in[k](t)[:3]
+            f_n = float(vertical.dot(pin.updateFramePlacement(model, data, self._ft[k]).rotation.dot(force)))
+            anchored[k] = bool(self._anchored[k](t))
+            forces[k] = f_n
+            contacts[k] = contact_hysteresis(f_n, anchored[k], self.contact_force_on, self.contact_force_off)
 
-        staying = [k for k in range(2) if contacts[k] and self._anchored[k](t)]
-        if staying:                                                         # (4)
-            total = sum(forces[k] for k in staying)
-            p_wb = sum((forces[k] / total) * (self._anchor[k](t) - feet_w[k]) for k in staying)
+        staying = [k for k in range(2) if contacts[k] and anchored[k]]
+        anchors = [self._anchor[k](t) if k in staying else None for k in range(2)]
+        if len(staying) == 2:                                               # (4)
+            total = forces[0] + forces[1]
+            weights = np.array([forces[0] / total, forces[1] / total])
+            p_wb = weights.dot(np.array(anchors) - world[:2])
+        elif staying:
+            k = staying[0]
+            p_wb = anchors[k] - world[k]
         else:
             p_wb = np.array(self.position_prediction(t), dtype=float)
-        anchors = []
         for k in range(2):
-            if k in staying:
-                anchors.append(self._anchor[k](t))
-            elif contacts[k]:
-                anchors.append(p_wb + feet_w[k])
-            else:
-                anchors.append(None)
+            if contacts[k] and anchors[k] is None:
+                anchors[k] = p_wb + world[k]
 
-        r_bi_w = r_wb @ imu.translation                                     # R_WB r_BI
-        lever = _cross(w_w, r_bi_w) + r_wb @ imu.linear                     # v_I - v_WB
+        lever = world[5]                                                    # v_I - v_WB
         x = self.velocity_prediction(t)
-        in_contact = [k for k in range(2) if contacts[k]]
-        if in_contact:                                                      # (5)
-            total = sum(forces[k] for k in in_contact)
-            v_kin = -sum((forces[k] / total) * (_cross(w_w, feet_w[k]) + r_wb @ frames[self._foot[k]].linear)
-                         for k in in_contact)
+        if contacts[0] or contacts[1]:                                      # (5)
+            total = (forces[0] if contacts[0] else 0.0) + (forces[1] if contacts[1] else 0.0)
+            weights = np.array([forces[0] / total if contacts[0] else 0.0, forces[1] / total if contacts[1] else 0.0])
+            v_i_kin = lever - weights.dot(world[3:5])
             alpha = complementary_alpha(self.cutoff_frequency, self.dt) if self.velocity_initialised(t) else 0.0
-            v_i = alpha * x + (1.0 - alpha) * (v_kin + lever)               # (6)
+            v_i = alpha * x + (1.0 - alpha) * v_i_kin                       # (6)
         else:
             v_i = np.array(x, dtype=float)
         v_wb = v_i - lever
-        a_w = r_wi @ self.imu_linear_acceleration(t) + self._gravity
+        a_w = r_wi.dot(self.imu_linear_acceleration(t)) + self._gravity
 
         q = np.concatenate([p_wb, matrix_to_quat(r_wb), q_j])               # (7)
-        v = np.concatenate([r_wb.T @ v_wb, w_b, qd_j])
-        return Estimate(q=q, v=v, contacts=contacts, anchors=anchors, base_velocity_world=v_wb,
-                        next_velocity=v_i + self.dt * a_w, next_position=p_wb + self.dt * v_wb)
+        v = np.concatenate([v_wb.dot(r_wb), w_b, qd_j])
+        dt = self.dt
+        return Estimate(q, v, contacts, anchors, v_wb, v_i + dt * a_w, p_wb + dt * v_wb)
 
     @dg.output(shape=("nq",), depends=("estimate",))
     def q(self, t: int) -> Any:

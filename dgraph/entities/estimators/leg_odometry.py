@@ -90,7 +90,7 @@ def standing_configuration(model: Any, foot_frames: Sequence[str]) -> np.ndarray
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrix of a quaternion ``[x, y, z, w]`` (normalised here)."""
-    x, y, z, w = q / math.sqrt(float(q @ q))
+    x, y, z, w = (q / math.sqrt(float(q @ q))).tolist()  # Python floats: cheaper than numpy scalars
     return np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
@@ -100,19 +100,20 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
 
 def matrix_to_quat(r: np.ndarray) -> np.ndarray:
     """Quaternion ``[x, y, z, w]`` (``w >= 0``) of a rotation matrix (Shepperd's method)."""
-    trace = r[0, 0] + r[1, 1] + r[2, 2]
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r.tolist()
+    trace = r00 + r11 + r22
     if trace > 0:
         s = 2.0 * math.sqrt(1.0 + trace)
-        q = [(r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s]
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
-        q = [0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s]
-    elif r[1, 1] > r[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
-        q = [(r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s]
+        q = [(r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s, 0.25 * s]
+    elif r00 > r11 and r00 > r22:
+        s = 2.0 * math.sqrt(1.0 + r00 - r11 - r22)
+        q = [0.25 * s, (r01 + r10) / s, (r02 + r20) / s, (r21 - r12) / s]
+    elif r11 > r22:
+        s = 2.0 * math.sqrt(1.0 + r11 - r00 - r22)
+        q = [(r01 + r10) / s, 0.25 * s, (r12 + r21) / s, (r02 - r20) / s]
     else:
-        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
-        q = [(r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s]
+        s = 2.0 * math.sqrt(1.0 + r22 - r00 - r11)
+        q = [(r02 + r20) / s, (r12 + r21) / s, 0.25 * s, (r10 - r01) / s]
     out = np.array(q)
     out /= math.sqrt(float(out @ out))
     return -out if out[3] < 0 else out
@@ -164,12 +165,17 @@ class RelativeKinematics:
         self._v = np.zeros(model.nv)
         self._lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
+    def forward(self, q_joints: np.ndarray, v_joints: np.ndarray) -> None:
+        """Only the forward kinematics: read the frames with ``pinocchio.updateFramePlacement``
+        and ``getFrameVelocity(..., LOCAL_WORLD_ALIGNED)`` on ``model`` and ``data``."""
+        self._q[7:] = q_joints
+        self._v[6:] = v_joints
+        self._pin.forwardKinematics(self.model, self.data, self._q, self._v)
+
     def update(self, q_joints: np.ndarray, v_joints: np.ndarray) -> dict[int, FrameMotion]:
         """Motion of every frame (by id) relative to the base, for joint positions and velocities."""
         pin, model, data = self._pin, self.model, self.data
-        self._q[7:] = q_joints
-        self._v[6:] = v_joints
-        pin.forwardKinematics(model, data, self._q, self._v)
+        self.forward(q_joints, v_joints)
         out = {}
         for fid in self.frames:
             placement = pin.updateFramePlacement(model, data, fid)
