@@ -4,7 +4,8 @@ One tick ``t -> t + 1`` (``prepare_state(t)``): read ``control(t)`` (and the wre
 compute the joint torques, save the MuJoCo integration state (``mj_getState``), finish the step
 with ``mj_step2`` (actuation, acceleration, contacts, acceleration-stage sensors, integration),
 then ``mj_step1`` at the new state (kinematics, position/velocity sensors), check for divergence
-and stage every state. ``commit_state(t + 1)`` publishes them and cannot fail. Calling
+and stage every state (``fallen`` only when it changes, so its ``time`` is the tick of the
+change). ``commit_state(t + 1)`` publishes them and cannot fail. Calling
 ``mj_step2`` then ``mj_step1`` is the same sequence of computations as ``mj_step`` (split at a
 different place), so positions, velocities, gyro and orientation at ``t + 1`` are those of the
 new state without an extra ``mj_forward``.
