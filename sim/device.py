@@ -84,6 +84,7 @@ class MujocoDevice(dg.Device):
     video_path = dg.Param(None, kind="str", doc="record a video (.gif, .webp or .png) written at close")
     video_fps = dg.Param(25.0, kind="float", minimum=0.1, maximum=1000.0, doc="video frame rate")
     video_size = dg.Param([320, 240], kind="int_list", doc="video width and height in pixels")
+    video_camera = dg.Param("track", kind="str", choices=("track", "front"), doc="video camera: side or front view")
 
     control = dg.Input(shape=_na, doc="joint torques (torque mode) or position targets (position mode)")
     # declared per instance (their zero default is sized by the robot): feedforward_torque (na,
@@ -384,7 +385,7 @@ class MujocoDevice(dg.Device):
         """After hook: keep a video frame every 1 / video_fps seconds."""
         if t < self._next_frame:
             return
-        self._frames.append(self.render(*self.video_size))
+        self._frames.append(self.render(*self.video_size, camera=self.video_camera))
         self._next_frame = t + max(1, round(1.0 / (self.video_fps * self.dt)))
 
     def write_video(self) -> str | None:

@@ -26,7 +26,7 @@ SCENE_GROUP = 0
 def _quat_from_rpy(roll: float, pitch: float, yaw: float = 0.0) -> list[float]:
     """MuJoCo quaternion ``(w, x, y, z)`` of ``Rz(yaw) Ry(pitch) Rx(roll)``."""
     quat = np.zeros(4)
-    mujoco.mju_euler2Quat(quat, np.array([roll, pitch, yaw]), "xyz")
+    mujoco.mju_euler2Quat(quat, np.array([roll, pitch, yaw]), "XYZ")  # uppercase: extrinsic, i.e. Rz Ry Rx
     return quat.tolist()
 
 
@@ -108,6 +108,14 @@ class Scene:
             name=name, pos=[0.0, -distance, height], quat=_quat_from_rpy(np.pi / 2.0 - tilt, 0.0, 0.0),
             mode=mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM)
 
+    def front_camera(self, distance: float = 3.5, height: float = 1.0, tilt: float = 0.12,
+                     name: str = "front") -> mujoco.MjsCamera:
+        """A camera fixed in the world at ``(distance, 0, height)``, looking back along -x and
+        ``tilt`` rad down: lateral motion of a robot standing at the origin shows (a tracking
+        camera would follow it)."""
+        return self.spec.worldbody.add_camera(name=name, pos=[distance, 0.0, height],
+                                              quat=_quat_from_rpy(np.pi / 2.0 - tilt, 0.0, np.pi / 2.0))
+
 
 def flat(scene: Scene) -> None:
     """A flat floor (friction 1)."""
@@ -137,13 +145,15 @@ SCENES: dict[str, Callable[[Scene], None]] = {"flat": flat, "block": block, "sta
 
 
 def add_scene(spec: mujoco.MjSpec, name: str, tracked_body: str | None = None) -> Scene:
-    """Add the scene ``name`` to ``spec``, plus a light and (if given) a camera tracking ``tracked_body``."""
+    """Add the scene ``name`` to ``spec``, plus a light, a ``front`` camera fixed in the world and
+    (if given) a ``track`` camera following ``tracked_body`` from the side."""
     if name not in SCENES:
         raise ValueError(f"unknown scene {name!r}; known: {', '.join(SCENES)}")
     scene = Scene(spec)
     SCENES[name](scene)
     scene.light()
     scene.sky()
+    scene.front_camera()
     if tracked_body is not None:
         scene.tracking_camera(tracked_body)
     return scene

@@ -47,6 +47,6 @@ def test_named_scenes_compile_with_light_and_camera():
         spec.worldbody.add_body(name="base").add_geom(size=[0.1, 0, 0])
         add_scene(spec, name, tracked_body="base")
         m = spec.compile()
-        assert m.nlight == 1 and m.ncam == 1 and m.geom("floor").id >= 0
+        assert m.nlight == 1 and m.ncam == 2 and m.geom("floor").id >= 0  # side and front cameras
     with pytest.raises(ValueError, match="unknown scene"):
         add_scene(mujoco.MjSpec(), "moon")
