@@ -7,7 +7,7 @@ import pinocchio as pin
 
 import dgraph as dg
 from dgraph.entities.contacts.constraint import ContactConstraint
-from dgraph.entities.robot.robot_state import LOCAL, RobotState, frame_problems
+from dgraph.entities.robot.robot_state import LOCAL, FrameReader
 
 
 def corner_positions(front: float, back: float, half_width: float) -> np.ndarray:
@@ -42,7 +42,7 @@ def friction_pyramid(n_corners: int, mu: float) -> np.ndarray:
 
 
 @dg.register
-class Contact6d(dg.Entity):
+class Contact6d(FrameReader, dg.Entity):
     """A rigid planar contact of a robot frame (thesis §2.4, Eq. 4.10–4.11; TSID's Contact6d).
 
     Motion: the contact frame must not accelerate, with a PD correction of drift from the
@@ -95,7 +95,6 @@ class Contact6d(dg.Entity):
         self._friction = np.vstack([pyramid, normal_sum])
         self._lower = np.concatenate([np.full(len(pyramid), -np.inf), [self.min_normal_force]])
         self._upper = np.concatenate([np.zeros(len(pyramid)), [self.max_normal_force]])
-        self._frame_id: int | None = None
 
     def reset(self) -> None:
         """No anchor until the first tick in contact."""
@@ -111,29 +110,19 @@ class Contact6d(dg.Entity):
         """Remove the contact from the QP."""
         self.active.set(False)
 
-    def check(self) -> list[str]:
-        """The frame must exist in the plugged robot model."""
-        return frame_problems(self.robot, [self.frame])
-
-    def _frame(self, state: RobotState) -> int:
-        if self._frame_id is None:
-            try:
-                self._frame_id = state.frame_id(self.frame)
-            except KeyError:
-                raise dg.ParamError(f"{self.name}: the robot model has no frame {self.frame!r}",
-                                    entity=self.name) from None
-        return self._frame_id
-
     def _anchor(self, t: int) -> pin.SE3:
         """The anchored placement, or the current one before the first anchoring tick."""
         anchor = self.anchor(t)
-        return anchor if anchor is not None else self.robot(t).frame_placement(self._frame(self.robot(t)))
+        if anchor is not None:
+            return anchor
+        state = self.robot(t)
+        return state.frame_placement(self.frame_index(state))
 
     @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "anchor"))
     def contact(self, t: int) -> ContactConstraint:
         """Motion rows, force generator and friction rows at ``t``."""
         state = self.robot(t)
-        frame = self._frame(state)
+        frame = self.frame_index(state)
         placement, anchor = state.frame_placement(frame), self._anchor(t)
         rotation = placement.rotation
         error = np.concatenate([rotation.T @ (placement.translation - anchor.translation),

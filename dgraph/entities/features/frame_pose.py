@@ -7,7 +7,7 @@ import pinocchio as pin
 
 import dgraph as dg
 from dgraph.entities.features.feature import Feature, FeatureValue, parse_mask
-from dgraph.entities.robot.robot_state import WORLD, RobotState, frame_problems
+from dgraph.entities.robot.robot_state import WORLD, FrameReader, RobotState
 
 
 def orientation_error(rotation: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -16,7 +16,7 @@ def orientation_error(rotation: np.ndarray, reference: np.ndarray) -> np.ndarray
 
 
 @dg.register
-class FramePose(Feature):
+class FramePose(FrameReader, Feature):
     """Pose of ``frame`` against a reference, with world axes at the frame origin (thesis Eq. 4.6).
 
     ``x = (p, R)``, ``x* = (p*, R*)``;
@@ -45,24 +45,10 @@ class FramePose(Feature):
         """Parse the mask."""
         self.rows = parse_mask(self, self.mask, 6)
         self.size = 6 if self.rows is None else len(self.rows)
-        self._frame_id: int | None = None
-
-    def check(self) -> list[str]:
-        """The frame must exist in the plugged robot model."""
-        return frame_problems(self.robot, [self.frame])
-
-    def _resolve(self, state: RobotState) -> int:
-        if self._frame_id is None:
-            try:
-                self._frame_id = state.frame_id(self.frame)
-            except KeyError:
-                raise dg.ParamError(f"{self.name}: the robot model has no frame {self.frame!r}",
-                                    entity=self.name) from None
-        return self._frame_id
 
     def evaluate(self, state: RobotState, t: int) -> FeatureValue:
         """Pose error and its derivatives on SE(3), world axes."""
-        frame = self._resolve(state)
+        frame = self.frame_index(state)
         placement = state.frame_placement(frame)
         quat = self.reference_orientation(t)
         norm = np.linalg.norm(quat)

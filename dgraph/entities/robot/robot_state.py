@@ -132,6 +132,33 @@ def frame_problems(robot_input: Any, frames: list[str]) -> list[str]:
             if not model.existFrame(f)]
 
 
+class FrameReader:
+    """Mixin for entities with a ``frame`` parameter and a ``robot`` input (a RobotModel's state).
+
+    ``frame_index(state)`` is the frame's id in the state's model, looked up once per model
+    (a clear ``ParamError`` naming the entity if the model lacks it); ``check`` reports a
+    missing frame when the graph is validated, before anything runs.
+    """
+
+    def check(self) -> list[str]:
+        """The frame must exist in the plugged robot model."""
+        return frame_problems(self.robot, [self.frame])
+
+    def frame_index(self, state: RobotState) -> int:
+        """The id of ``self.frame`` in ``state.model``."""
+        cached = getattr(self, "_frame_cache", None)
+        if cached is not None and cached[0] is state.model:
+            return cached[1]
+        try:
+            index = state.frame_id(self.frame)
+        except KeyError:
+            from dgraph.errors import ParamError
+
+            raise ParamError(f"{self.name}: the robot model has no frame {self.frame!r}", entity=self.name) from None
+        self._frame_cache = (state.model, index)
+        return index
+
+
 def homogeneous(placement: pin.SE3) -> np.ndarray:
     """The 4 x 4 homogeneous matrix of a placement."""
     return placement.homogeneous.copy()
