@@ -99,6 +99,7 @@ class Contact6d(FrameReader, dg.Entity):
     def reset(self) -> None:
         """No anchor until the first tick in contact."""
         self.anchor.set(None, 0)
+        self._changed = False
 
     @dg.command
     def activate(self) -> None:
@@ -138,12 +139,14 @@ class Contact6d(FrameReader, dg.Entity):
         return self.contact(t).error
 
     def prepare_state(self, t: int) -> None:
-        """Anchor at the first active tick; forget the anchor when inactive."""
-        if not self.active(t):
-            self.anchor.stage(None)
-        else:
-            self.anchor.stage(pin.SE3(self._anchor(t)))
+        """Anchor at the first active tick; forget the anchor when inactive. The anchor is
+        staged only when it changes, so a steady contact does not disturb its readers."""
+        anchored = self.anchor(t) is not None
+        self._changed = anchored != bool(self.active(t))
+        if self._changed:
+            self.anchor.stage(pin.SE3(self._anchor(t)) if not anchored else None)
 
     def commit_state(self, t_next: int) -> None:
-        """Publish the anchor."""
-        self.anchor.commit(t_next)
+        """Publish the anchor if it changed."""
+        if self._changed:
+            self.anchor.commit(t_next)
