@@ -70,8 +70,10 @@ class FloatingBaseEstimator(dg.Entity):
 
        i.e. ``V_I = tau s / (1 + tau s) (A_W / s) + 1 / (1 + tau s) V_I,kin``: the integrated
        accelerometer above the cutoff, leg kinematics below. ``cutoff_frequency = inf`` is
-       kinematics only. Until a foot has touched once (state ``i`` false), there is no
-       prediction: ``v_I = v_I,kin`` (``alpha = 0``) at the first tick with a contact.
+       kinematics only. At the first tick only (state ``i`` false) there is no prediction
+       yet: ``v_I = v_I,kin`` (``alpha = 0``) if a foot touches, else ``x(0)`` (the robot
+       starts at ``v0 = 0``); from then on the prediction is kept, in flight too, so a robot
+       that lands keeps the velocity it fell with.
        Base velocity: ``v_WB = v_I - w_W x (R_WB r_BI) - R_WB rd_BI``.
     7. Outputs (Pinocchio conventions): ``q = [p_WB, quat_xyzw(R_WB), q_j]``,
        ``v = [R_WB^T v_WB, w_B, qd_j]``.
@@ -289,8 +291,8 @@ class FloatingBaseEstimator(dg.Entity):
                 if est.contacts[k]:
                     self._anchor[k].stage(est.anchors[k])
                     pending.append(self._anchor[k])
-        if any(est.contacts) and not self.velocity_initialised(t):
-            self.velocity_initialised.stage(True)
+        if not self.velocity_initialised(t):  # after the first tick the prediction is meaningful,
+            self.velocity_initialised.stage(True)  # in flight too (the robot starts at v0)
             pending.append(self.velocity_initialised)
         self._pending = pending
 
