@@ -289,11 +289,23 @@ class Graph:
         run(self, ticks=ticks, duration=duration, progress=progress)
 
     def close(self) -> None:
-        """Close every entity that holds resources (recorders flush their files)."""
+        """Close every entity that holds resources (recorders flush their files).
+
+        Every entity is closed even if one fails; the first failure is then raised, as a
+        :class:`GraphError` naming the entity (so one bad file never loses the others).
+        """
+        failures: list[tuple[str, Exception]] = []
         for entity in self:
             closer = getattr(entity, "close", None)
             if callable(closer):
-                closer()
+                try:
+                    closer()
+                except Exception as exc:
+                    failures.append((entity.name, exc))
+        if failures:
+            name, exc = failures[0]
+            others = f" (and {len(failures) - 1} more)" if len(failures) > 1 else ""
+            raise GraphError(f"closing {name} failed: {type(exc).__name__}: {exc}{others}", entity=name) from exc
 
     def __enter__(self) -> Graph:
         return self

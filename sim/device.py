@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import copy
 import math
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -193,6 +194,10 @@ class MujocoDevice(dg.Device):
         self._frames: list[np.ndarray] = []
         self._next_frame = 0
         if self.video_path is not None:
+            if Path(self.video_path).suffix.lower() not in (".gif", ".webp", ".png"):
+                raise dg.ParamError(f"{self.name}: video_path must end in .gif, .webp or .png (written with "
+                                    f"Pillow; no video encoder is installed), got {self.video_path!r}",
+                                    entity=self.name)
             self.after.add(self._record_frame)
 
     def reset(self) -> None:
@@ -395,14 +400,21 @@ class MujocoDevice(dg.Device):
         from PIL import Image
 
         images = [Image.fromarray(f) for f in self._frames]
-        images[0].save(self.video_path, save_all=True, append_images=images[1:],
-                       duration=round(1000.0 / self.video_fps), loop=0)
+        try:
+            Path(self.video_path).parent.mkdir(parents=True, exist_ok=True)
+            images[0].save(self.video_path, save_all=True, append_images=images[1:],
+                           duration=round(1000.0 / self.video_fps), loop=0)
+        except (OSError, ValueError) as exc:
+            raise dg.DGraphError(f"{self.name}: cannot write the video {self.video_path}: {exc}",
+                                 entity=self.name) from None
         return self.video_path
 
     def close(self) -> None:
-        """Write the video (if any) and free the renderers."""
-        self.write_video()
-        self._frames = []
-        for renderer in self._renderers.values():
-            renderer.close()
+        """Write the video (if any) and free the renderers (freed even if the video fails)."""
+        try:
+            self.write_video()
+        finally:
+            self._frames = []
+            for renderer in self._renderers.values():
+                renderer.close()
         self._renderers = {}

@@ -143,3 +143,25 @@ def test_removed_entity_keeps_working_on_its_own_clock(graph):
     graph.remove("s")
     assert s.output not in graph.clock.time_varying and s.output._clock is not graph.clock
     assert s.output(2) == pytest.approx(0.0, abs=1e-12) and s.output(3) == pytest.approx(-1.0)
+
+
+def test_close_closes_every_entity_and_names_the_first_failure(tmp_path):
+    from dgraph.entities.recording import Recorder
+
+    class Leaky(dg.Entity):
+        """An entity whose close fails."""
+
+        def close(self):
+            raise OSError("disk full")
+
+    g = dg.Graph(dt=0.001)
+    g.add(Leaky("leaky"))
+    g.add(Ticker("clock"))
+    g.add(Scale("s"))
+    g.plug("clock.x", "s.u")
+    recorder = g.add(Recorder("rec", signals=["s.y"], rerun="off", npz_path=str(tmp_path / "r.npz")))
+    g.run(ticks=3, progress=False)
+    with pytest.raises(dg.GraphError, match="closing leaky failed: OSError: disk full") as err:
+        g.close()
+    assert err.value.entity == "leaky"
+    assert recorder.closed and (tmp_path / "r.npz").is_file()  # closed after the failure all the same

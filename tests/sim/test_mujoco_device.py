@@ -243,3 +243,8 @@ def test_render_snapshot_and_video(tmp_path):
     assert Image.open(tmp_path / "s.png").size == (64, 48)
     video = Image.open(tmp_path / "fall.gif")
     assert video.n_frames == 3 and video.size == (32, 24)
+
+
+def test_a_video_format_pillow_cannot_write_is_refused_at_construction():
+    with pytest.raises(dg.ParamError, match=r"device: video_path must end in \.gif, \.webp or \.png"):
+        MujocoDevice("device", video_path="out/run.mp4")
