@@ -161,19 +161,23 @@ def test_a_failed_tick_logs_nothing(tmp_path):
     assert list(poses_over_time(read_rrd(tmp_path / "f.rrd")["/world/robot/base_link"])) == [0]
 
 
-def test_streams_are_shared_per_file_and_closed_by_the_last_user(tmp_path):
-    a = open_stream("app", "save", str(tmp_path / "s.rrd"), 0.001)
-    b = open_stream("other", "save", str(tmp_path / ".." / tmp_path.name / "s.rrd"), 0.001)
-    c = open_stream("app", "save", str(tmp_path / "t.rrd"), 0.001)
+def test_streams_are_shared_per_file_and_graph_and_closed_by_the_last_user(tmp_path):
+    graph, other = object(), object()
+    a = open_stream("app", "save", str(tmp_path / "s.rrd"), 0.001, graph)
+    b = open_stream("app", "save", str(tmp_path / ".." / tmp_path.name / "s.rrd"), 0.001, graph)
+    c = open_stream("app", "save", str(tmp_path / "t.rrd"), 0.001, graph)
     assert a is b and a is not c and a.users == 2
-    with pytest.raises(dg.GraphError, match="already open with dt=0.001"):
-        open_stream("app", "save", str(tmp_path / "s.rrd"), 0.01)
+    with pytest.raises(dg.GraphError, match="rec: the Rerun sink .* already open with dt=0.001") as err:
+        open_stream("app", "save", str(tmp_path / "s.rrd"), 0.01, graph, "rec")
+    assert err.value.entity == "rec"
+    with pytest.raises(dg.GraphError, match="view: the Rerun sink .*s.rrd is already in use by another graph"):
+        open_stream("app", "save", str(tmp_path / "s.rrd"), 0.001, other, "view")
     a.close()
-    assert open_stream("app", "save", str(tmp_path / "s.rrd"), 0.001) is a  # still open: shared again
+    assert open_stream("app", "save", str(tmp_path / "s.rrd"), 0.001, graph) is a  # still open: shared again
     a.close()
     b.close()
     c.close()
-    d = open_stream("app", "save", str(tmp_path / "s.rrd"), 0.001)
+    d = open_stream("app", "save", str(tmp_path / "s.rrd"), 0.001, other)
     assert d is not a and d.users == 1  # closed: a new stream
     d.close()
 

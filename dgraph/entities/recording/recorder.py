@@ -95,7 +95,7 @@ class Recorder(dg.Entity):
         if self.rerun == "save" and not self.rrd_path:
             self.rrd_path = f"out/{safe_file_stem(self.graph.name)}.rrd"
         if self.rerun != "off":
-            self._stream = open_stream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt)
+            self._stream = open_stream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt, self.graph, self.name)
         return self._sources
 
     def observe(self, t: int) -> None:

@@ -44,6 +44,8 @@ class RerunStream:
             rr.serve_web_viewer(open_browser=False, connect_to=self.url)
         self._declared: set[str] = set()
         self.users = 1
+        self.application_id = application_id
+        self.owner: object = None
         self._key: tuple[str, str] | None = None
 
     def indexes(self, ticks: np.ndarray) -> list[Any]:
@@ -74,22 +76,31 @@ _OPEN: dict[tuple[str, str], RerunStream] = {}
 """Open shared streams by sink: ``("save", absolute .rrd path)``, ``(mode, application id)``."""
 
 
-def open_stream(application_id: str, mode: str, rrd_path: str | None, dt: float) -> RerunStream:
-    """The stream of this sink, shared: opened by the first user, counted for the others.
+def open_stream(application_id: str, mode: str, rrd_path: str | None, dt: float, owner: object = None,
+                user: str | None = None) -> RerunStream:
+    """The stream of this sink, shared within one graph: opened by the first user, counted for
+    the others (a Recorder and a RobotView of a graph draw into one recording).
 
-    Two writers of one .rrd file would corrupt it, so sharing is keyed by the file for
-    ``save``, and by the application (graph) name for ``spawn`` and ``serve``. Every caller
-    must :meth:`~RerunStream.close` it once. Users must agree on ``dt`` (``GraphError``).
+    Sharing is keyed by the file for ``save`` (two writers would corrupt it), and by the
+    application (graph) name for ``spawn`` and ``serve``. Only users with the same ``owner``
+    (the graph) share: another graph asking for an open file gets a ``GraphError`` naming
+    ``user`` (the entity), as does a user with another ``dt``. Every caller must
+    :meth:`~RerunStream.close` it once.
     """
     key = (mode, str(Path(str(rrd_path)).resolve())) if mode == "save" else (mode, application_id)
     stream = _OPEN.get(key)
     if stream is None:
         stream = RerunStream(application_id, mode, rrd_path, dt)
-        stream._key = key
+        stream._key, stream.owner = key, owner
         _OPEN[key] = stream
         return stream
+    prefix = f"{user}: " if user else ""
+    if stream.owner is not owner:
+        raise GraphError(f"{prefix}the Rerun sink {key[1]} is already in use by another graph "
+                         f"({stream.application_id!r}); give each graph its own file", entity=user)
     if stream.dt != dt:
-        raise GraphError(f"the Rerun sink {key[1]} is already open with dt={stream.dt}, not {dt}")
+        raise GraphError(f"{prefix}the Rerun sink {key[1]} is already open with dt={stream.dt}, not {dt}",
+                         entity=user)
     stream.users += 1
     return stream
 

@@ -182,7 +182,7 @@ class RobotView(dg.Entity):
             raise dg.GraphError(f"{self.name}: a robot view must be in a graph", entity=self.name)
         if self.rerun == "save" and not self.rrd_path:
             self.rrd_path = f"out/{safe_file_stem(self.graph.name)}.rrd"
-        self._stream = open_stream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt)
+        self._stream = open_stream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt, self.graph, self.name)
         return self._stream
 
     def observe(self, t: int) -> None:
