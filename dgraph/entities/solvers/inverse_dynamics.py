@@ -94,7 +94,7 @@ class InverseDynamicsSolver(dg.Entity):
             if kind is TaskEquation and value.matrix.shape[1] != self.nv:
                 raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: task matrix has {value.matrix.shape[1]} "
                                    f"columns, the robot has nv = {self.nv}", entity=self.name, signal=inp.name)
-        return tasks, [c for c in contacts if c.active]
+        return tasks, contacts
 
     def fallback_torque(self, state: RobotState) -> np.ndarray:
         """``g_j(q) - d v_j``, clipped to the torque limits."""
@@ -107,7 +107,9 @@ class InverseDynamicsSolver(dg.Entity):
         """Solve the QP at ``t`` (or fall back)."""
         state: RobotState = self.robot(t)
         tasks, contacts = self._read(t)
-        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, contacts, None)
+        active = [row for row, contact in enumerate(contacts) if contact.active]
+        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, [contacts[r] for r in active], None, t)
+        solution.contact_rows = active
         if solution.status != SOLVED:
             solution.tau = self.fallback_torque(state)
         return solution
@@ -127,12 +129,8 @@ class InverseDynamicsSolver(dg.Entity):
         """One ``[force, torque]`` row per declared contact (world axes; zeros if inactive)."""
         solution = self.solution(t)
         wrenches = np.zeros((self.n_contacts, 6))
-        by_name = {c.name: (c, f) for c, f in zip(solution.contacts, solution.forces, strict=True)}
-        for row, inp in enumerate(self._contact_inputs):
-            value = inp.value
-            if value is not None and value.name in by_name:
-                contact, forces = by_name[value.name]
-                wrenches[row] = contact.world_wrench(forces)
+        for row, contact, forces in zip(solution.contact_rows, solution.contacts, solution.forces, strict=True):
+            wrenches[row] = contact.world_wrench(forces)
         return wrenches
 
     @dg.output(shape=(), depends=("contact_wrenches",))

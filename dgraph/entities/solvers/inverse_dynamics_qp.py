@@ -57,6 +57,7 @@ class QPSolution:
     solve_time: float
     objective: float = 0.0
     contacts: list[ContactConstraint] = field(default_factory=list)
+    contact_rows: list[int] = field(default_factory=list)  # which declared contact each one is (set by the entity)
 
 
 @dataclass(slots=True)
@@ -78,6 +79,10 @@ class _Workspace:
     upper: np.ndarray
     sources: list[tuple[object, ...]] = field(default_factory=list)
     initialised: bool = False
+    latest: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # last solution (x, y, z)
+    guess: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # warm start of this tick's solves
+    tick: int | None = None  # the tick ``guess`` serves
+    solved: tuple[list[np.ndarray], QPSolution] | None = None  # the problem solved at ``tick``, its answer
 
 
 class InverseDynamicsQP:
@@ -113,7 +118,7 @@ class InverseDynamicsQP:
             qp.settings.eps_abs = self.eps_abs
             qp.settings.eps_rel = 0.0
             qp.settings.max_iter = self.max_iterations
-            qp.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
+            qp.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START
             ws = _Workspace(qp, np.zeros((n, n)), np.zeros(n), np.zeros((n_eq, n)), np.zeros(n_eq),
                             np.zeros((n_in, n)), np.zeros(n_in), np.zeros(n_in))
             self._workspaces[key] = ws
@@ -166,10 +171,20 @@ class InverseDynamicsQP:
 
     # -- solving -----------------------------------------------------------------------------
     def solve(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, tasks: list[TaskEquation],
-              contacts: list[ContactConstraint], fallback_tau: np.ndarray) -> QPSolution:
-        """Assemble, solve, and recover ``tau``; never raises on a numerical failure."""
+              contacts: list[ContactConstraint], fallback_tau: np.ndarray, tick: int | None = None) -> QPSolution:
+        """Assemble, solve, and recover ``tau``; never raises on a numerical failure.
+
+        The warm start is the solution of the latest earlier tick: solving again at the same
+        ``tick`` (a graph with its cache off) starts from the same guess and gives the same
+        answer bit for bit.
+        """
         start = time.perf_counter()
         ws = self.assemble(mass_matrix, bias_forces, tasks, contacts)
+        problem = [ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper]
+        if tick is None or tick != ws.tick:
+            ws.guess, ws.tick, ws.solved = ws.latest, tick, None
+        elif ws.solved is not None and all(np.array_equal(a, b) for a, b in zip(problem, ws.solved[0], strict=True)):
+            return ws.solved[1]  # the same problem again in this tick: the same answer
         finite = all(math.isfinite(np.vdot(m, m)) for m in (ws.H, ws.g, ws.A, ws.b, ws.C[-self.na:], ws.lower))
         status, iterations = NOT_FINITE, 0
         if finite:
@@ -179,7 +194,10 @@ class InverseDynamicsQP:
             else:
                 qp.init(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper)
                 ws.initialised = True
-            qp.solve()
+            if ws.guess is None:
+                qp.solve()
+            else:
+                qp.solve(*ws.guess)
             info = qp.results.info
             status = _PROXQP_STATUS.get(info.status.name, NOT_SOLVED)
             iterations = int(info.iter)
@@ -187,14 +205,18 @@ class InverseDynamicsQP:
             if status == SOLVED and not np.isfinite(x).all():
                 status = NOT_FINITE
         if status != SOLVED:
-            ws.initialised = False  # never warm-start from a failed solve
+            ws.initialised, ws.latest = False, None  # never warm-start from a failed solve
             return QPSolution(np.zeros(self.nv), fallback_tau, [np.zeros(c.n_forces) for c in contacts], status,
                               iterations, time.perf_counter() - start, contacts=contacts)
         x = x.copy()
+        ws.latest = (x, qp.results.y.copy(), qp.results.z.copy())
         acceleration, forces = x[:self.nv], self._split_forces(x, contacts)
         tau = ws.C[-self.na:] @ x + bias_forces[self.nu:]  # torque rows are [M_j, -(J^T T)_j]
-        return QPSolution(acceleration, tau, forces, SOLVED, iterations, time.perf_counter() - start,
-                          float(qp.results.info.objValue), contacts)
+        solution = QPSolution(acceleration, tau, forces, SOLVED, iterations, time.perf_counter() - start,
+                              float(qp.results.info.objValue), contacts)
+        if tick is not None:
+            ws.solved = ([m.copy() for m in problem], solution)
+        return solution
 
     def _split_forces(self, x: np.ndarray, contacts: list[ContactConstraint]) -> list[np.ndarray]:
         forces, col = [], self.nv

@@ -91,7 +91,7 @@ class Task(dg.Entity):
         kp, kd = self._gains(len(f.error), t)
         return f.reference_acceleration - kp * f.error - kd * f.error_velocity
 
-    @dg.output(dtype="object")
+    @dg.output(dtype="object", depends=("feature", "weight", "desired_acceleration"))
     def equation(self, t: int) -> TaskEquation:
         """``A = J``, ``b = x_ddot_des - J_dot v``, per-row weights."""
         f = self._feature(t)
