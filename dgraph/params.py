@@ -24,6 +24,8 @@ MAX_PORTS = 256
 def _to_float(v: Any) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
         raise TypeError(f"expected a number, got {type(v).__name__}")
+    if v != v:
+        raise TypeError("expected a number, got NaN")
     return float(v)
 
 

@@ -88,9 +88,9 @@ class MujocoDevice(dg.Device):
     video_camera = dg.Param("track", kind="str", choices=("track", "front"), doc="video camera: side or front view")
 
     control = dg.Input(shape=_na, doc="joint torques (torque mode) or position targets (position mode)")
-    # declared per instance (their zero default is sized by the robot): feedforward_torque (na,
-    # added torque in position mode), velocity_reference (na, joint velocity reference in position
-    # mode), and wrench_<body> (6) for each of wrench_bodies
+    # declared per instance (their zero default is sized by the robot): in position mode only,
+    # feedforward_torque (na, added torque) and velocity_reference (na, joint velocity
+    # reference); and wrench_<body> (6) for each of wrench_bodies
 
     q = dg.State(shape=("nq",), doc="configuration (Pinocchio: base position, quaternion xyzw, joints)")
     v = dg.State(shape=("nv",), doc="velocity (Pinocchio: base linear and angular in the base frame, joints)")
@@ -128,10 +128,11 @@ class MujocoDevice(dg.Device):
             self._gains[name] = np.broadcast_to(gain, (self.na,)).copy()
         if len(self.video_size) != 2 or min(self.video_size) < 8 or max(self.video_size) > 4096:
             raise dg.ParamError(f"{self.name}: video_size must be [width, height] in 8..4096", entity=self.name)
-        self.declare("feedforward_torque", dg.Input(shape=(self.na,), default=np.zeros(self.na),
-                                                    doc="added joint torque in position mode, N m"))
-        self.declare("velocity_reference", dg.Input(shape=(self.na,), default=np.zeros(self.na),
-                                                    doc="joint velocity reference in position mode, rad/s"))
+        if self.control_mode == "position":  # they would be silently ignored in torque mode
+            self.declare("feedforward_torque", dg.Input(shape=(self.na,), default=np.zeros(self.na),
+                                                        doc="added joint torque in position mode, N m"))
+            self.declare("velocity_reference", dg.Input(shape=(self.na,), default=np.zeros(self.na),
+                                                        doc="joint velocity reference in position mode, rad/s"))
         self._wrenches: list[tuple[int, str]] = []
         for body in self.wrench_bodies:
             body_id = mujoco.mj_name2id(self.mj_model, mujoco.mjtObj.mjOBJ_BODY, body)

@@ -63,3 +63,14 @@ def test_unknown_kind_and_describe():
         Param(kind="complex")
     assert make("size", kind="int", default=3, doc="the size").describe() == "size: int = 3  -- the size"
     assert make("value", kind="vector").describe() == "value: vector = required"
+
+
+def test_nan_is_never_a_float_parameter():
+    class Timed(dg.Entity):
+        """A float parameter, unbounded."""
+
+        delay = dg.Param(0.0, kind="float")
+
+    with pytest.raises(dg.ParamError, match="NaN"):
+        Timed("t", delay=float("nan"))
+    assert Timed("t", delay=float("inf")).delay == float("inf")  # infinity can mean something (a cutoff)

@@ -191,3 +191,24 @@ def test_malformed_npz_files_are_reported(tmp_path):
         TrajectoryFile("traj", path=str(tmp_path / "d.npz"))
     with pytest.raises(dg.ParamError, match="cannot read trajectory file"):
         TrajectoryFile("traj", path=str(tmp_path / "missing.csv"))
+
+
+def test_trajectory_files_with_a_bom_a_unit_header_or_the_wrong_arrays(tmp_path):
+    bom = tmp_path / "bom.csv"
+    bom.write_text("\ufefftime_s,x\n0,0\n1,2\n", encoding="utf-8")
+    g = dg.Graph(dt=DT)
+    traj = g.add(TrajectoryFile("traj", path=str(bom)))
+    assert traj.position(500) == pytest.approx([1.0])
+    npy = tmp_path / "single.npz"
+    with npy.open("wb") as f:
+        np.save(f, np.zeros(3))
+    with pytest.raises(dg.ParamError, match=r"single\.npz.*not an \.npz archive"):
+        TrajectoryFile("t", path=str(npy))
+    complex_file = tmp_path / "c.npz"
+    np.savez(complex_file, time=np.arange(3.0), position=np.arange(3.0) + 1j)
+    with pytest.raises(dg.ParamError, match="'position' must hold real numbers"):
+        TrajectoryFile("t", path=str(complex_file))
+    empty = tmp_path / "e.npz"
+    np.savez(empty, time=np.arange(3.0), position=np.zeros((3, 0)))
+    with pytest.raises(dg.ParamError, match=r"position has shape \(3, 0\)"):
+        TrajectoryFile("t", path=str(empty))

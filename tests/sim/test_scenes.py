@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import mujoco
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from sim.scenes import SCENES, Scene, add_scene
@@ -28,6 +29,7 @@ def test_stairs_and_platform_geometry():
     scene.floor()
     scene.stairs(steps=3, rise=0.1, run=0.3, start=(1.0, 0.0), width=0.8)
     scene.platform("ramp", size=(1.0, 1.0, 0.05), pos=(3.0, 0.0, 0.1), roll=0.0, pitch=0.2)
+    scene.platform("tilted", size=(1.0, 1.0, 0.05), pos=(6.0, 0.0, 0.1), roll=0.1, pitch=-0.3)
     m = spec.compile()
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
@@ -39,6 +41,8 @@ def test_stairs_and_platform_geometry():
         assert geom.size[1] == pytest.approx(0.4)
     ramp = d.geom_xmat[m.geom("ramp").id].reshape(3, 3)
     assert np.arccos(ramp[2, 2]) == pytest.approx(0.2)  # its normal is tilted by the pitch
+    tilted = d.geom_xmat[m.geom("tilted").id].reshape(3, 3)
+    assert np.allclose(tilted, pin.rpy.rpyToMatrix(0.1, -0.3, 0.0), atol=1e-12)  # Rz Ry Rx, signs included
 
 
 def test_named_scenes_compile_with_light_and_camera():

@@ -39,8 +39,8 @@ class MinimumJerk(dg.Entity):
 
     has_state = True
     target = dg.Param(kind="vector", doc="final value (scalar or vector)")
-    duration = dg.Param(kind="float", doc="duration of the move in s (> 0)")
-    start = dg.Param(0.0, kind="float", minimum=0.0, doc="time at which the move starts, in s")
+    duration = dg.Param(kind="float", maximum=1e9, doc="duration of the move in s (> 0)")
+    start = dg.Param(0.0, kind="float", minimum=0.0, maximum=1e9, doc="time at which the move starts, in s")
     initial = dg.Param(None, kind="vector", doc="initial value (default: the input current at start)")
     dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
 

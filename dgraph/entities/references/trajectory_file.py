@@ -46,18 +46,20 @@ def _check_times(path: Path, time: np.ndarray, lines: list[int] | None, what: st
 
 
 def read_csv(path: Path, layout: str) -> TrajectoryData:
-    """Read ``time, values...`` rows; ``#`` lines are comments, a first line starting with ``t``
-    or ``time`` is a header. Every cell must be a finite number (nothing is evaluated)."""
+    """Read ``time, values...`` rows; ``#`` lines are comments, a first line whose first cell is
+    ``t``, ``time`` or starts with ``time_`` / ``t_`` (``time_s``) is a header; a UTF-8 byte-order
+    mark is ignored. Every cell must be a finite number (nothing is evaluated)."""
     blocks = LAYOUTS[layout]
     rows: list[list[float]] = []
     lines: list[int] = []
     width: int | None = None
-    with path.open(newline="") as f:
+    with path.open(newline="", encoding="utf-8-sig") as f:
         for lineno, cells in enumerate(csv.reader(f), start=1):
             cells = [c.strip() for c in cells]
             if not cells or all(not c for c in cells) or cells[0].startswith("#"):
                 continue
-            if width is None and not rows and cells[0].lower() in ("t", "time"):
+            first = cells[0].lower()
+            if width is None and not rows and (first in ("t", "time") or first.startswith(("t_", "time_"))):
                 width = len(cells)  # the header fixes the column count
                 header_line = lineno
                 continue
@@ -96,15 +98,21 @@ def read_npz(path: Path) -> TrajectoryData:
         archive = np.load(path, allow_pickle=False)
     except (ValueError, OSError) as exc:
         raise _fail(path, None, f"not a readable .npz file: {exc}") from None
+    if not isinstance(archive, np.lib.npyio.NpzFile):
+        raise _fail(path, None, "not an .npz archive (a single .npy array?): save arrays named time, position, "
+                    "... with numpy.savez")
     with archive:
         for key in ("time", "position"):
             if key not in archive.files:
                 raise _fail(path, None, f"missing array {key!r} (has: {', '.join(archive.files) or 'none'})")
         try:
-            arrays = {k: np.asarray(archive[k], dtype=float) for k in ("time", "position", "velocity", "acceleration")
-                      if k in archive.files}
+            raw = {k: archive[k] for k in ("time", "position", "velocity", "acceleration") if k in archive.files}
         except (ValueError, TypeError) as exc:
             raise _fail(path, None, f"arrays must hold numbers: {exc}") from None
+        for key, value in raw.items():
+            if value.dtype.kind not in "iuf":
+                raise _fail(path, None, f"array {key!r} must hold real numbers, got dtype {value.dtype}")
+        arrays = {k: np.asarray(v, dtype=float) for k, v in raw.items()}
     time = arrays["time"]
     if time.ndim != 1:
         raise _fail(path, None, f"time must be 1-D, got shape {time.shape}")
@@ -112,8 +120,8 @@ def read_npz(path: Path) -> TrajectoryData:
         if key != "time":
             if value.ndim == 1:
                 arrays[key] = value = value[:, None]
-            if value.ndim != 2 or value.shape[0] != len(time):
-                raise _fail(path, None, f"{key} has shape {value.shape}: expected ({len(time)}, n)")
+            if value.ndim != 2 or value.shape[0] != len(time) or value.shape[1] == 0:
+                raise _fail(path, None, f"{key} has shape {value.shape}: expected ({len(time)}, n), n >= 1")
             if value.shape[1] != arrays["position"].shape[1]:
                 raise _fail(path, None, f"{key} has {value.shape[1]} columns, position {arrays['position'].shape[1]}")
         bad = np.flatnonzero(~np.isfinite(value).all(axis=tuple(range(1, value.ndim))))
@@ -188,7 +196,7 @@ class TrajectoryFile(dg.Entity):
     path = dg.Param(kind="str", doc="trajectory file (.csv or .npz)")
     layout = dg.Param("p", kind="str", choices=tuple(LAYOUTS), doc="CSV columns after time: p, pv or pva blocks")
     interpolation = dg.Param("cubic", kind="str", choices=("linear", "cubic"), doc="interpolation in time")
-    start = dg.Param(0.0, kind="float", doc="graph time (s) at which file time 0 is played")
+    start = dg.Param(0.0, kind="float", minimum=-1e9, maximum=1e9, doc="graph time (s) at which file time 0 is played")
     dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
 
     def configure(self) -> None:
