@@ -144,3 +144,29 @@ def test_task_gain_errors_and_critical_damping():
     task.kp.set(-1.0)
     with pytest.raises(dg.DGraphError, match=r"task\.kp must be >= 0"):
         task.equation(0)
+
+
+def test_gains_follow_a_producer_that_reuses_its_buffer():
+    class Schedule(dg.Entity):
+        """kp grows with time, written into the same array every tick."""
+
+        def configure(self):
+            self.buffer = np.zeros(3)
+
+        @dg.output(shape=(3,), depends=("t",))
+        def kp(self, t):
+            self.buffer[:] = 4.0 * (t + 1) ** 2
+            return self.buffer
+
+    _, q, v = random_state(6)
+    g, _ = robot_graph(q, v)
+    g.add(CenterOfMass("com")).reference_position.set(np.zeros(3))
+    task = g.add(Task("task", critical_damping=True))
+    g.add(Schedule("schedule"))
+    g.plug("robot.state", "com.robot")
+    g.plug("com.feature", "task.feature")
+    g.plug("schedule.kp", "task.kp")
+    f = g["com"].feature(0)
+    for t in (0, 1, 2):  # kp = 4, 16, 36: Kd = 4, 8, 12
+        kp = 4.0 * (t + 1) ** 2
+        assert np.allclose(task.desired_acceleration(t), -kp * f.error - 2 * np.sqrt(kp) * f.error_velocity)

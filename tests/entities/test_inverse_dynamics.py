@@ -9,7 +9,7 @@ import pytest
 
 from dgraph.entities.solvers import InverseDynamicsQP
 from dgraph.entities.solvers.inverse_dynamics_qp import NOT_FINITE, PRIMAL_INFEASIBLE, SOLVED
-from tests.entities.talos_graph import CONTACTS, build, half_sitting
+from tests.entities.talos_graph import build, half_sitting
 
 
 def perturbed_state(seed):
@@ -94,13 +94,21 @@ def test_anchor_is_taken_at_the_first_tick_and_released_when_inactive():
     graph = build()
     foot = graph["left_foot"]
     graph.step()
-    anchor = foot.anchor(1)
     placement = graph["robot"].left_sole_link_placement(0)
-    assert np.allclose(anchor.homogeneous, placement)
+    assert np.allclose(foot.anchor(1).homogeneous, placement)
+    q = half_sitting()
+    q[7:13] += 0.05  # the left leg moves: the anchor stays, the error grows
+    graph["robot"].q.set(q)
+    graph.step()
+    assert np.allclose(foot.anchor(2).homogeneous, placement)
+    assert np.linalg.norm(foot.error(2)) > 0.01
     foot.deactivate()
     graph.step()
-    assert foot.anchor(2) is None
-    assert foot.error(2) == pytest.approx(np.zeros(6))
+    assert foot.anchor(3) is None
+    foot.activate()
+    graph.step()  # re-anchored where the foot is now
+    assert np.allclose(foot.anchor(4).homogeneous, graph["robot"].left_sole_link_placement(3))
+    assert foot.error(4) == pytest.approx(np.zeros(6), abs=1e-12)
 
 
 def test_infeasible_problem_gives_a_status_and_the_fallback_torque():
@@ -150,8 +158,29 @@ def test_wrong_inputs_are_named():
     graph["solver"].com_task.set(np.zeros(3))
     with pytest.raises(Exception, match=r"solver\.com_task.*expected a TaskEquation"):
         graph["solver"].tau(0)
-    assert len(CONTACTS) == 2
+    graph.plug("com_task.equation", "solver.com_task")
+    bad = graph["com_task"].equation(0)
+    graph.unplug("solver.com_task")
+    graph["solver"].com_task.set(type(bad)(bad.matrix, bad.vector, -bad.weight))
+    with pytest.raises(Exception, match=r"solver\.com_task at tick 0: negative weights"):
+        graph["solver"].tau(0)
+    graph["solver"].com_task.set(type(bad)(bad.matrix[:2], bad.vector, bad.weight))
+    with pytest.raises(Exception, match=r"solver\.com_task at tick 0: 2 rows but a vector of shape \(3,\)"):
+        graph["solver"].tau(0)
+    graph["left_foot"].kp.set(-30.0)
+    with pytest.raises(Exception, match=r"left_foot\.kp must be >= 0"):
+        graph["left_foot"].contact(0)
 
+
+def test_a_real_solver_failure_is_not_sticky():
+    graph = build()
+    graph["posture_task"].kp.set(1e5)  # absurd: ProxQP declares the problem primal infeasible
+    graph["posture"].reference.set(half_sitting()[7:] + 0.5)
+    solver = graph["solver"]
+    assert solver.status(0) == PRIMAL_INFEASIBLE
+    graph["posture_task"].kp.set(1e3)  # reasonable again: solved at once, no warm start from the failure
+    assert solver.status(0) == SOLVED
+    assert dynamics_residual(graph) < 1e-6
 
 def test_validation_names_a_missing_frame_and_a_model_size_mismatch(tmp_path):
     import dgraph as dg

@@ -121,3 +121,21 @@ def test_bad_frame_and_model_are_clear_errors():
         RobotModel("robot", frames=["nope"])
     with pytest.raises(dg.ParamError, match="cannot load robot model"):
         RobotModel("robot", model="no_such_robot")
+
+
+def test_a_state_kept_past_its_pass_raises_instead_of_answering_for_another(model):
+    g = dg.Graph(dt=0.001)
+    robot = g.add(RobotModel("robot"))
+    q, v = random_state(model, 6)
+    robot.q.set(q)
+    robot.v.set(v)
+    old = robot.state(0)
+    com, placement = old.com_position, old.frame_placement(model.getFrameId("left_sole_link"))
+    robot.q.set(pin.neutral(model))
+    robot.state(0)  # a new pass on the shared data
+    with pytest.raises(dg.DGraphError, match="read after its Pinocchio data was reused"):
+        old.com_position
+    assert np.allclose(com, pin.centerOfMass(model, model.createData(), q))  # copies stay valid
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q)
+    assert np.allclose(placement.homogeneous, data.oMf[model.getFrameId("left_sole_link")].homogeneous)

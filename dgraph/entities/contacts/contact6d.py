@@ -8,6 +8,7 @@ import pinocchio as pin
 import dgraph as dg
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.robot.robot_state import LOCAL, FrameReader
+from dgraph.entities.tasks.gains import Gains
 
 
 def corner_positions(front: float, back: float, half_width: float) -> np.ndarray:
@@ -72,7 +73,7 @@ class Contact6d(FrameReader, dg.Entity):
     front = dg.Param(0.10, kind="float", minimum=0.0, doc="sole length in front of the frame origin (m)")
     back = dg.Param(0.11, kind="float", minimum=0.0, doc="sole length behind the frame origin (m)")
     half_width = dg.Param(0.069, kind="float", minimum=0.0, doc="half width of the sole (m)")
-    mu = dg.Param(0.3, kind="float", minimum=0.0, doc="friction coefficient")
+    mu = dg.Param(0.3, kind="float", minimum=1e-3, doc="friction coefficient (> 0: the pyramid keeps corners pushing)")
     min_normal_force = dg.Param(1.0, kind="float", minimum=0.0, doc="minimum total normal force (N)")
     max_normal_force = dg.Param(1000.0, kind="float", minimum=0.0, doc="maximum total normal force (N)")
     force_weight = dg.Param(1e-5, kind="float", minimum=0.0, doc="weight of ||f||^2 in the cost")
@@ -93,6 +94,7 @@ class Contact6d(FrameReader, dg.Entity):
         normal_sum = np.zeros((1, 3 * len(corners)))
         normal_sum[0, 2::3] = 1.0
         self._friction = np.vstack([pyramid, normal_sum])
+        self._gains = Gains(self)
         self._lower = np.concatenate([np.full(len(pyramid), -np.inf), [self.min_normal_force]])
         self._upper = np.concatenate([np.zeros(len(pyramid)), [self.max_normal_force]])
 
@@ -128,10 +130,11 @@ class Contact6d(FrameReader, dg.Entity):
         rotation = placement.rotation
         error = np.concatenate([rotation.T @ (placement.translation - anchor.translation),
                                 pin.log3(anchor.rotation.T @ rotation)])
-        desired = -self.kp(t) * error - self.kd(t) * state.frame_velocity(frame, LOCAL)
+        kp, kd = self._gains.vector("kp", 6, t), self._gains.vector("kd", 6, t)
+        desired = -kp * error - kd * state.frame_velocity(frame, LOCAL)
         return ContactConstraint(self.name, bool(self.active(t)), state.frame_jacobian(frame, LOCAL),
                                  desired - state.frame_drift(frame, LOCAL), self._generator, self._friction,
-                                 self._lower, self._upper, self.force_weight, rotation, error)
+                                 self._lower, self._upper, self.force_weight, rotation.copy(), error)
 
     @dg.output(shape=(6,), depends=("contact",))
     def error(self, t: int) -> np.ndarray:

@@ -14,13 +14,21 @@ Frame conventions used throughout dgraph's robot entities:
 from __future__ import annotations
 
 import functools
+import weakref
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
+from dgraph.errors import DGraphError, ParamError
+
 WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 LOCAL = pin.ReferenceFrame.LOCAL
+
+
+_OWNERS: weakref.WeakValueDictionary[int, RobotState] = weakref.WeakValueDictionary()
+"""The state whose pass last filled each Pinocchio data (by ``id``; a live entry keeps its data
+alive, so an ``id`` is never reused while it is listed)."""
 
 
 class RobotState:
@@ -34,13 +42,27 @@ class RobotState:
     """
 
     def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray):
-        self.model, self.data, self.q, self.v = model, data, q, v
+        self.model, self._pin_data, self.q, self.v = model, data, q, v
+        _OWNERS[id(data)] = self
         pin.computeAllTerms(model, data, q, v)  # also leaves data.a = the accelerations at a = 0
         pin.updateFramePlacements(model, data)
         pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
         self.mass_matrix = data.M.copy()  # Pinocchio 4 fills both triangles (checked by a test)
         self.bias_forces = data.nle.copy()
         self._centroidal_drift: np.ndarray | None = None
+
+    @property
+    def data(self) -> pin.Data:
+        """The Pinocchio data of this pass. It is shared: a later pass on another ``(q, v)``
+        overwrites it, after which reading this state raises instead of answering for the
+        other state (values already read are copies and stay valid)."""
+        data = self._pin_data
+        owner = _OWNERS.get(id(data))
+        if owner is not self and owner is not None and not (
+                np.array_equal(owner.q, self.q) and np.array_equal(owner.v, self.v)):
+            raise DGraphError("a RobotState was read after its Pinocchio data was reused for another (q, v): "
+                              "keep copies of the values (e.g. com_position), not the state")
+        return data
 
     # -- whole body -------------------------------------------------------------------------
     @property
@@ -99,8 +121,8 @@ class RobotState:
         return self.model.getFrameId(name)
 
     def frame_placement(self, frame: int) -> pin.SE3:
-        """World placement ``oMf`` of a frame."""
-        return self.data.oMf[frame]
+        """World placement ``oMf`` of a frame (a copy)."""
+        return pin.SE3(self.data.oMf[frame])
 
     def frame_velocity(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> np.ndarray:
         """Frame twist ``[linear, angular]`` (``WORLD``: ``[p_dot, omega]``; ``LOCAL``: body twist)."""
@@ -152,8 +174,6 @@ class FrameReader:
         try:
             index = state.frame_id(self.frame)
         except KeyError:
-            from dgraph.errors import ParamError
-
             raise ParamError(f"{self.name}: the robot model has no frame {self.frame!r}", entity=self.name) from None
         self._frame_cache = (state.model, index)
         return index

@@ -91,10 +91,23 @@ class InverseDynamicsSolver(dg.Entity):
             if not isinstance(value, kind):
                 raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: expected a {kind.__name__}, got "
                                    f"{type(value).__name__}", entity=self.name, signal=inp.name)
-            if kind is TaskEquation and value.matrix.shape[1] != self.nv:
-                raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: task matrix has {value.matrix.shape[1]} "
-                                   f"columns, the robot has nv = {self.nv}", entity=self.name, signal=inp.name)
+            if kind is TaskEquation:
+                self._check_equation(inp.name, value, t)
         return tasks, contacts
+
+    def _check_equation(self, name: str, equation: TaskEquation, t: int) -> None:
+        """``A`` (m x nv), ``b`` (m), ``w`` (m) >= 0, or a ``SpecError`` naming the input."""
+        rows = equation.matrix.shape[0] if equation.matrix.ndim == 2 else -1
+        problem = None
+        if equation.matrix.ndim != 2 or equation.matrix.shape[1] != self.nv:
+            problem = f"task matrix has shape {equation.matrix.shape}, the robot has nv = {self.nv}"
+        elif equation.vector.shape != (rows,) or equation.weight.shape != (rows,):
+            problem = (f"{rows} rows but a vector of shape {equation.vector.shape} and weights of shape "
+                       f"{equation.weight.shape}")
+        elif (equation.weight < 0).any():
+            problem = "negative weights (the cost would not be convex)"
+        if problem is not None:
+            raise dg.SpecError(f"{self.name}.{name} at tick {t}: {problem}", entity=self.name, signal=name)
 
     def fallback_torque(self, state: RobotState) -> np.ndarray:
         """``g_j(q) - d v_j``, clipped to the torque limits."""

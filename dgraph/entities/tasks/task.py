@@ -7,17 +7,7 @@ import numpy as np
 import dgraph as dg
 from dgraph.entities.features.feature import FeatureValue
 from dgraph.entities.tasks.equation import TaskEquation
-
-
-def _broadcast(entity: dg.Entity, name: str, value: np.ndarray, size: int, t: int) -> np.ndarray:
-    """A scalar or a size-``size`` vector gain, as a vector (clear error otherwise)."""
-    value = np.asarray(value, dtype=float)
-    if value.ndim == 0:
-        return np.full(size, float(value))
-    if value.shape != (size,):
-        raise dg.SpecError(f"{entity.name}.{name} at tick {t}: expected a scalar or {size} values for a "
-                           f"{size}-row feature, got shape {value.shape}", entity=entity.name, signal=name)
-    return value
+from dgraph.entities.tasks.gains import Gains
 
 
 @dg.register
@@ -52,30 +42,16 @@ class Task(dg.Entity):
         """Declare ``kd`` unless the damping is critical."""
         if not self.critical_damping:
             self.declare("kd", dg.Input(default=0.0, doc="derivative gain (scalar or per row)"))
-        self._vectors: dict[str, tuple[object, np.ndarray]] = {}
-
-    def _vector(self, name: str, size: int, t: int) -> np.ndarray:
-        """The input ``name`` as ``size`` values >= 0, converted once per new value: constants and
-        slowly changing signals are the same object tick after tick."""
-        value = getattr(self, name)(t)
-        cached = self._vectors.get(name)
-        if cached is not None and cached[0] is value and len(cached[1]) == size:
-            return cached[1]
-        vector = _broadcast(self, name, value, size, t)
-        if (vector < 0).any():
-            raise dg.SpecError(f"{self.name}.{name} must be >= 0 at tick {t}", entity=self.name, signal=name)
-        self._vectors[name] = (value, vector)
-        return vector
+        self._gain_vectors = Gains(self)
+        self._critical: tuple[np.ndarray, np.ndarray] | None = None
 
     def _gains(self, size: int, t: int) -> tuple[np.ndarray, np.ndarray]:
-        kp = self._vector("kp", size, t)
+        kp = self._gain_vectors.vector("kp", size, t)
         if self.critical_damping:
-            cached = self._vectors.get("critical")
-            if cached is None or cached[0] is not kp:
-                cached = (kp, 2.0 * np.sqrt(kp))
-                self._vectors["critical"] = cached
-            return kp, cached[1]
-        return kp, self._vector("kd", size, t)
+            if self._critical is None or self._critical[0] is not kp:  # a new kp vector: a new Kd
+                self._critical = (kp, 2.0 * np.sqrt(kp))
+            return kp, self._critical[1]
+        return kp, self._gain_vectors.vector("kd", size, t)
 
     def _feature(self, t: int) -> FeatureValue:
         value = self.feature(t)
@@ -95,5 +71,5 @@ class Task(dg.Entity):
     def equation(self, t: int) -> TaskEquation:
         """``A = J``, ``b = x_ddot_des - J_dot v``, per-row weights."""
         f = self._feature(t)
-        weight = self._vector("weight", len(f.error), t)
+        weight = self._gain_vectors.vector("weight", len(f.error), t)
         return TaskEquation(f.jacobian, self.desired_acceleration(t) - f.drift, weight)
