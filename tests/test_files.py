@@ -59,7 +59,8 @@ def test_a_saved_graph_runs_the_same(tmp_path):
     dg.save(a, tmp_path / "copy.yaml")
     b = dg.load(tmp_path / "copy.yaml")
     for g in (a, b):
-        g.run(ticks=500)
+        with g:  # one after the other: both record to out/pd_double_integrator.rrd
+            g.run(ticks=500)
     assert np.array_equal(a["robot.q"].value, b["robot.q"].value)
 
 
