@@ -9,6 +9,12 @@ import numpy as np
 import dgraph as dg
 
 
+def _bytes_key(value: Any) -> tuple[tuple[int, ...], bytes]:
+    """An exact, cheap identity of an array's value (comparing bytes: 0.1 µs for 32 numbers)."""
+    array = np.asarray(value, dtype=float)
+    return array.shape, array.tobytes()
+
+
 class Gains:
     """Reads gain inputs (``kp``, ``kd``, ``weight``...) of ``entity`` as vectors of ``size``
     values >= 0 (a scalar is broadcast); a value is converted and checked only when it differs
@@ -21,11 +27,12 @@ class Gains:
     def vector(self, name: str, size: int, t: int) -> np.ndarray:
         """The input ``name`` at ``t`` as ``size`` values >= 0 (``SpecError`` naming it otherwise)."""
         value = getattr(self.entity, name)(t)
+        key = value if type(value) is float else _bytes_key(value)
         cached = self._cache.get(name)
-        if cached is not None and len(cached[1]) == size and np.array_equal(cached[0], value):
+        if cached is not None and cached[0] == key and len(cached[1]) == size:
             return cached[1]
         vector = self._convert(name, value, size, t)
-        self._cache[name] = (np.array(value, dtype=float), vector)
+        self._cache[name] = (key, vector)
         return vector
 
     def _convert(self, name: str, value: Any, size: int, t: int) -> np.ndarray:
