@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import abc
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,7 +43,7 @@ def parse_mask(entity: dg.Entity, mask: str, width: int) -> np.ndarray | None:
     return None if len(rows) == width else rows
 
 
-class Feature(dg.Entity):
+class Feature(dg.Entity, abc.ABC):
     """Base of features: subclasses implement :meth:`evaluate` on the robot's shared state.
 
     Input: ``robot`` (the ``state`` output of a :class:`~dgraph.entities.robot.RobotModel`).
@@ -53,9 +54,9 @@ class Feature(dg.Entity):
 
     robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
 
+    @abc.abstractmethod
     def evaluate(self, state: RobotState, t: int) -> FeatureValue:
-        """The full (unmasked) feature at ``t`` (override)."""
-        raise NotImplementedError
+        """The full (unmasked) feature at ``t`` (each feature type defines it)."""
 
     @dg.output(dtype="object")
     def feature(self, t: int) -> FeatureValue:
