@@ -36,7 +36,6 @@ from __future__ import annotations
 import os
 import re
 from dataclasses import dataclass, field
-from functools import lru_cache
 from typing import Any
 
 import mujoco
@@ -80,12 +79,11 @@ class RobotInfo:
     """Default joint damping of a position-mode PD (actuated order), N m s/rad."""
 
 
-@lru_cache(maxsize=4)
 def pinocchio_model(name: str = "talos") -> Any:
-    """The Pinocchio model of an example-robot-data robot (cached per process; do not modify)."""
-    import example_robot_data as erd
+    """The Pinocchio model of an example-robot-data robot (the robot family's cached one; do not modify)."""
+    from dgraph.entities.robot import load_model
 
-    return erd.load(name).model
+    return load_model(name)
 
 
 def _urdf_text(relative: str) -> tuple[str, str]:

@@ -119,8 +119,14 @@ def test_entity_outputs_share_one_pass_per_tick(model):
 def test_bad_frame_and_model_are_clear_errors():
     with pytest.raises(dg.ParamError, match="no frame 'nope'"):
         RobotModel("robot", frames=["nope"])
-    with pytest.raises(dg.ParamError, match="cannot load robot model"):
+    with pytest.raises(dg.ParamError, match="robot: cannot load robot model 'no_such_robot'"):
         RobotModel("robot", model="no_such_robot")
+    from dgraph.entities.devices import KinematicDevice
+    from dgraph.entities.estimators import FloatingBaseEstimator
+
+    for entity in (lambda: KinematicDevice("dev", model=3), lambda: FloatingBaseEstimator("est", model=3)):
+        with pytest.raises(dg.ParamError, match="model must be a robot name or a pinocchio.Model, got int"):
+            entity()
 
 
 def test_a_state_kept_past_its_pass_raises_instead_of_answering_for_another(model):

@@ -2,23 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 import dgraph as dg
 from dgraph.params import MAX_SIZE
-
-
-def _load_model(model: Any) -> Any:
-    """A pinocchio model from an example-robot-data name or a ``pinocchio.Model``."""
-    import pinocchio as pin
-
-    if isinstance(model, pin.Model):
-        return model
-    import example_robot_data as erd
-
-    return erd.load(model).model
 
 
 @dg.register
@@ -52,10 +39,9 @@ class KinematicDevice(dg.Device):
     def configure(self) -> None:
         """Size the state from the model or from ``size``."""
         if self.model is not None:
-            if not isinstance(self.model, str) and type(self.model).__name__ != "Model":
-                raise dg.ParamError(f"{self.name}: model must be a robot name or a pinocchio.Model",
-                                 entity=self.name)
-            self.pin_model = _load_model(self.model)
+            from dgraph.entities.robot.robot_state import load_model  # Pinocchio only when given a model
+
+            self.pin_model = load_model(self.model, self.name)
             self.nq, self.nv = self.pin_model.nq, self.pin_model.nv
         elif self.size is not None and self.size > 0:
             self.pin_model = None

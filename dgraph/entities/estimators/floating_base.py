@@ -13,10 +13,10 @@ from dgraph.entities.estimators.leg_odometry import (
     contact_hysteresis,
     default_imu_frame,
     frame_id,
-    load_model,
     matrix_to_quat,
     standing_configuration,
 )
+from dgraph.entities.robot.robot_state import load_model
 
 
 class Estimate:
@@ -134,7 +134,7 @@ class FloatingBaseEstimator(dg.Entity):
     def configure(self) -> None:
         """Load the model, resolve the frames, size the encoder inputs."""
         entity = f"{self.name} ({self.type_name})"
-        self.pin_model = model = load_model(self.model, self.name, entity)
+        self.pin_model = model = load_model(self.model, self.name)
         if model.njoints < 2 or model.joints[1].shortname() != "JointModelFreeFlyer":
             raise dg.ParamError(f"{entity}: the model's first joint must be a free flyer", entity=self.name)
         self.nq, self.nv = model.nq, model.nv

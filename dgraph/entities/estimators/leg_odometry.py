@@ -15,7 +15,6 @@ relative to the base expressed in ``B``: ``d/dt r_BX = J_X^lin(q_j) qd_j`` and
 from __future__ import annotations
 
 import difflib
-import functools
 import math
 from collections.abc import Sequence
 from typing import Any
@@ -23,33 +22,6 @@ from typing import Any
 import numpy as np
 
 from dgraph.errors import ParamError
-
-
-@functools.lru_cache(maxsize=8)
-def _load_by_name(name: str) -> Any:
-    import example_robot_data as erd
-
-    return erd.load(name).model
-
-
-def load_model(model: Any, entity: str, label: str | None = None) -> Any:
-    """A ``pinocchio.Model`` from an example-robot-data name (cached) or a model itself.
-
-    The model is shared read-only; every estimator works on its own ``Data``. Errors are
-    :class:`ParamError` for ``entity`` (its name), messages start with ``label`` (default: the name).
-    """
-    label = label or entity
-    import pinocchio as pin
-
-    if isinstance(model, pin.Model):
-        return model
-    if not isinstance(model, str):
-        raise ParamError(f"{label}: model must be a robot name or a pinocchio.Model, got "
-                         f"{type(model).__name__}", entity=entity)
-    try:
-        return _load_by_name(model)
-    except Exception as exc:
-        raise ParamError(f"{label}: cannot load robot model {model!r}: {exc}", entity=entity) from None
 
 
 def frame_id(model: Any, name: str, entity: str, param: str, label: str | None = None) -> int:

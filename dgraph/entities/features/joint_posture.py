@@ -31,7 +31,7 @@ class JointPosture(Feature):
 
     def configure(self) -> None:
         """Resolve the joints and declare the inputs sized by them."""
-        model = load_model(self.model)
+        model = load_model(self.model, self.name)
         self.nv = model.nv
         names = list(self.joints) or [model.names[j] for j in range(1, model.njoints) if model.joints[j].nv == 1]
         self.q_index, self.v_index = [], []

@@ -69,13 +69,7 @@ class RobotModel(dg.Entity):
 
     def configure(self) -> None:
         """Load the model and declare the per-frame outputs."""
-        if not isinstance(self.model, str) and type(self.model).__name__ != "Model":
-            raise dg.ParamError(f"{self.name}: model must be a robot name or a pinocchio.Model", entity=self.name)
-        try:
-            self.pin_model = load_model(self.model)
-        except Exception as exc:
-            raise dg.ParamError(f"{self.name}: cannot load robot model {self.model!r}: {exc}",
-                                entity=self.name) from None
+        self.pin_model = load_model(self.model, self.name)
         self.nq, self.nv = self.pin_model.nq, self.pin_model.nv
         self._data = self.pin_model.createData()
         for frame in self.frames:

@@ -184,15 +184,22 @@ def homogeneous(placement: pin.SE3) -> np.ndarray:
     return placement.homogeneous.copy()
 
 
-def load_model(model: Any) -> pin.Model:
+def load_model(model: Any, entity: str | None = None) -> pin.Model:
     """A Pinocchio model from an example-robot-data name (e.g. ``talos``) or a ``pin.Model``.
 
     Models loaded by name are cached per process (loading TALOS takes ~0.8 s) and shared:
-    entities must not modify them.
+    entities must not modify them. A bad value raises :class:`ParamError` naming ``entity``.
     """
     if isinstance(model, pin.Model):
         return model
-    return _load_named(str(model))
+    prefix = f"{entity}: " if entity else ""
+    if not isinstance(model, str):
+        raise ParamError(f"{prefix}model must be a robot name or a pinocchio.Model, got {type(model).__name__}",
+                         entity=entity)
+    try:
+        return _load_named(model)
+    except Exception as exc:  # example-robot-data raises plain exceptions for unknown names
+        raise ParamError(f"{prefix}cannot load robot model {model!r}: {exc}", entity=entity) from None
 
 
 @functools.lru_cache(maxsize=8)

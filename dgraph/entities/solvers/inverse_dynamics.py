@@ -50,7 +50,7 @@ class InverseDynamicsSolver(dg.Entity):
 
     def configure(self) -> None:
         """Size the outputs from the model and declare one input per task and per contact."""
-        model = load_model(self.model)
+        model = load_model(self.model, self.name)
         self.nv = model.nv
         self.n_unactuated = model.joints[1].nv if model.njoints > 1 and model.joints[1].shortname() == \
             "JointModelFreeFlyer" else 0

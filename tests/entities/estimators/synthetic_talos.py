@@ -26,7 +26,8 @@ import numpy as np
 import pinocchio as pin
 
 import dgraph as dg
-from dgraph.entities.estimators.leg_odometry import load_model, standing_configuration
+from dgraph.entities.estimators.leg_odometry import standing_configuration
+from dgraph.entities.robot import load_model
 
 DT = 0.001
 SOLES = ("left_sole_link", "right_sole_link")
@@ -70,7 +71,7 @@ def _smooth(s: float) -> tuple[float, float]:
 
 def generate(duration: float = 3.0, lift: Lift | None = None, sway: float = 1.0) -> Trajectory:
     """Sensor data of TALOS swaying for ``duration`` s (``sway`` scales the base motion)."""
-    model = load_model("talos", "synthetic")
+    model = load_model("talos")
     data = model.createData()
     q = standing_configuration(model, SOLES)
     p0, r0 = q[:3].copy(), pin.Quaternion(q[3:7]).toRotationMatrix()
