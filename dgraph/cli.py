@@ -43,7 +43,7 @@ def _parse_sets(items: list[str]) -> dict[str, Any]:
 
 def _recorder_names(path: str, types: tuple[str, ...] = ("Recorder",)) -> tuple[list[str], str]:
     """The entities of the given types (recorders) a graph file declares, and its file-safe name."""
-    from dgraph.entities.recording.recorder import safe_file_stem
+    from dgraph.entities.recording.rerun_stream import safe_file_stem
     from dgraph.files import declared_entities, parse, read_text
 
     data, _ = parse(read_text(path), path)

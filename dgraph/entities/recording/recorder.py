@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any
 
@@ -10,14 +9,8 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.recording.columns import Column
-from dgraph.entities.recording.rerun_stream import RerunStream, open_stream
+from dgraph.entities.recording.rerun_stream import RerunStream, open_stream_for
 from dgraph.signals.signal import Signal
-
-
-def safe_file_stem(name: str) -> str:
-    """``name`` reduced to a file name that stays in its directory (no separators, no leading dot)."""
-    stem = re.sub(r"[^A-Za-z0-9_.\-]", "_", name).lstrip(".")
-    return stem or "graph"
 
 
 def component_names(sig: Signal, shape: tuple[int, ...]) -> list[str]:
@@ -92,10 +85,8 @@ class Recorder(dg.Entity):
         if problems:
             raise dg.GraphError("; ".join(problems), entity=self.name)
         self._sources = [self.graph.signal(name) for name in self.signals]
-        if self.rerun == "save" and not self.rrd_path:
-            self.rrd_path = f"out/{safe_file_stem(self.graph.name)}.rrd"
         if self.rerun != "off":
-            self._stream = open_stream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt, self.graph, self.name)
+            self._stream = open_stream_for(self)
         return self._sources
 
     def observe(self, t: int) -> None:

@@ -13,6 +13,7 @@ one recording; the last user's :meth:`RerunStream.close` flushes and closes the 
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -103,6 +104,21 @@ def open_stream(application_id: str, mode: str, rrd_path: str | None, dt: float,
                          entity=user)
     stream.users += 1
     return stream
+
+
+def safe_file_stem(name: str) -> str:
+    """``name`` reduced to a file name that stays in its directory (no separators, no leading dot)."""
+    stem = re.sub(r"[^A-Za-z0-9_.\-]", "_", name).lstrip(".")
+    return stem or "graph"
+
+
+def open_stream_for(entity: Any) -> RerunStream:
+    """The graph's shared stream for a recording entity (parameters ``rerun`` and ``rrd_path``;
+    ``save`` defaults to ``out/<graph name>.rrd``, so a Recorder and a RobotView share it)."""
+    graph = entity.graph
+    if entity.rerun == "save" and not entity.rrd_path:
+        entity.rrd_path = f"out/{safe_file_stem(graph.name)}.rrd"
+    return open_stream(graph.name, entity.rerun, entity.rrd_path, graph.dt, graph, entity.name)
 
 
 def read_series(rrd_path: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:

@@ -10,8 +10,7 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.recording.recorder import safe_file_stem
-from dgraph.entities.recording.rerun_stream import RerunStream, open_stream
+from dgraph.entities.recording.rerun_stream import RerunStream, open_stream_for
 
 FLOOR_HALF_SIZE = 2.0
 """Half side of the floor square, in metres."""
@@ -180,9 +179,7 @@ class RobotView(dg.Entity):
     def _open(self) -> RerunStream:
         if self.graph is None:
             raise dg.GraphError(f"{self.name}: a robot view must be in a graph", entity=self.name)
-        if self.rerun == "save" and not self.rrd_path:
-            self.rrd_path = f"out/{safe_file_stem(self.graph.name)}.rrd"
-        self._stream = open_stream(self.graph.name, self.rerun, self.rrd_path, self.graph.dt, self.graph, self.name)
+        self._stream = open_stream_for(self)
         return self._stream
 
     def observe(self, t: int) -> None:
