@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 import dgraph as dg
@@ -84,16 +86,18 @@ class InverseDynamicsSolver(dg.Entity):
         return []
 
     def _read(self, t: int) -> tuple[list[TaskEquation], list[ContactConstraint]]:
-        tasks = [inp(t) for inp in self._task_inputs]
-        contacts = [inp(t) for inp in self._contact_inputs]
-        for inp, value, kind in [(i, v, TaskEquation) for i, v in zip(self._task_inputs, tasks, strict=True)] + \
-                [(i, v, ContactConstraint) for i, v in zip(self._contact_inputs, contacts, strict=True)]:
-            if not isinstance(value, kind):
-                raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: expected a {kind.__name__}, got "
-                                   f"{type(value).__name__}", entity=self.name, signal=inp.name)
-            if kind is TaskEquation:
-                self._check_equation(inp.name, value, t)
-        return tasks, contacts
+        tasks = [self._value(inp, TaskEquation, t) for inp in self._task_inputs]
+        for inp, equation in zip(self._task_inputs, tasks, strict=True):
+            self._check_equation(inp.name, equation, t)
+        return tasks, [self._value(inp, ContactConstraint, t) for inp in self._contact_inputs]
+
+    def _value(self, inp: dg.Input, kind: type, t: int) -> Any:
+        """``inp(t)``, which must be a ``kind`` (a ``SpecError`` naming the input otherwise)."""
+        value = inp(t)
+        if not isinstance(value, kind):
+            raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: expected a {kind.__name__}, got "
+                               f"{type(value).__name__}", entity=self.name, signal=inp.name)
+        return value
 
     def _check_equation(self, name: str, equation: TaskEquation, t: int) -> None:
         """``A`` (m x nv), ``b`` (m), ``w`` (m) >= 0, or a ``SpecError`` naming the input."""
@@ -121,7 +125,7 @@ class InverseDynamicsSolver(dg.Entity):
         state: RobotState = self.robot(t)
         tasks, contacts = self._read(t)
         active = [row for row, contact in enumerate(contacts) if contact.active]
-        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, [contacts[r] for r in active], None, t)
+        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, [contacts[r] for r in active], t)
         solution.contact_rows = active
         if solution.status != SOLVED:
             solution.tau = self.fallback_torque(state)

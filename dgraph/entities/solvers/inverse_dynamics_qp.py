@@ -5,7 +5,7 @@ of the active contacts. Torques are not variables: the actuated rows of the dyna
 them back, ``tau = M_j a + h_j - (J_c^T T)_j f`` (thesis Eq. 2.4), so the QP keeps only the
 ``n_u`` unactuated (floating-base) rows as equalities. ``bench/id_formulations.py`` compares
 this with ``tau`` kept as variables (94 instead of 62 variables for TALOS on two feet; the
-solve takes twice as long, docs/control.md).
+solve takes 1.9 times as long, docs/control.md).
 
 ```
 min  sum_i ||A_i a - b_i||^2_{W_i} + sum_c w_c ||f_c||^2 + eps ||a||^2
@@ -46,11 +46,12 @@ class QPSolution:
     """The solver's answer at one tick.
 
     ``status`` is one of the module constants (``SOLVED`` = 0); when it is not ``SOLVED``,
-    ``tau`` is the caller's fallback and ``acceleration`` / ``forces`` are zeros.
+    ``tau`` is None (the solver entity puts its fallback there) and ``acceleration`` /
+    ``forces`` are zeros.
     """
 
     acceleration: np.ndarray
-    tau: np.ndarray
+    tau: np.ndarray | None
     forces: list[np.ndarray]
     status: int
     iterations: int
@@ -171,8 +172,9 @@ class InverseDynamicsQP:
 
     # -- solving -----------------------------------------------------------------------------
     def solve(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, tasks: list[TaskEquation],
-              contacts: list[ContactConstraint], fallback_tau: np.ndarray, tick: int | None = None) -> QPSolution:
-        """Assemble, solve, and recover ``tau``; never raises on a numerical failure.
+              contacts: list[ContactConstraint], tick: int | None = None) -> QPSolution:
+        """Assemble, solve, and recover ``tau``; never raises on a numerical failure (then
+        ``status`` says why and ``tau`` is None: the caller chooses the fallback).
 
         The warm start is the solution of the latest earlier tick: solving again at the same
         ``tick`` (a graph with its cache off) starts from the same guess and gives the same
@@ -186,37 +188,42 @@ class InverseDynamicsQP:
         elif ws.solved is not None and all(np.array_equal(a, b) for a, b in zip(problem, ws.solved[0], strict=True)):
             return ws.solved[1]  # the same problem again in this tick: the same answer
         finite = all(math.isfinite(np.vdot(m, m)) for m in (ws.H, ws.g, ws.A, ws.b, ws.C[-self.na:], ws.lower))
-        status, iterations = NOT_FINITE, 0
-        if finite:
-            qp = ws.qp
-            if ws.initialised:
-                qp.update(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper, update_preconditioner=False)
-            else:
-                qp.init(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper)
-                ws.initialised = True
-            if ws.guess is None:
-                qp.solve()
-            else:
-                qp.solve(*ws.guess)
-            info = qp.results.info
-            status = _PROXQP_STATUS.get(info.status.name, NOT_SOLVED)
-            iterations = int(info.iter)
-            x = qp.results.x
-            if status == SOLVED and not np.isfinite(x).all():
-                status = NOT_FINITE
+        status, iterations = self.run(ws, ws.guess) if finite else (NOT_FINITE, 0)
         if status != SOLVED:
-            ws.initialised, ws.latest = False, None  # never warm-start from a failed solve
-            return QPSolution(np.zeros(self.nv), fallback_tau, [np.zeros(c.n_forces) for c in contacts], status,
+            return QPSolution(np.zeros(self.nv), None, [np.zeros(c.n_forces) for c in contacts], status,
                               iterations, time.perf_counter() - start, contacts=contacts)
-        x = x.copy()
-        ws.latest = (x, qp.results.y.copy(), qp.results.z.copy())
+        x = ws.latest[0]
         acceleration, forces = x[:self.nv], self._split_forces(x, contacts)
         tau = ws.C[-self.na:] @ x + bias_forces[self.nu:]  # torque rows are [M_j, -(J^T T)_j]
         solution = QPSolution(acceleration, tau, forces, SOLVED, iterations, time.perf_counter() - start,
-                              float(qp.results.info.objValue), contacts)
+                              float(ws.qp.results.info.objValue), contacts)
         if tick is not None:
             ws.solved = ([m.copy() for m in problem], solution)
         return solution
+
+    def run(self, ws: _Workspace, guess: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> tuple[int, int]:
+        """ProxQP on an assembled workspace, warm-started from ``guess`` (``x, y, z``) or cold:
+        ``(status, iterations)``. A solution is kept in ``ws.latest``; after a failure the next
+        run starts cold (never from a failed iterate)."""
+        qp = ws.qp
+        if ws.initialised:
+            qp.update(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper, update_preconditioner=False)
+        else:
+            qp.init(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper)
+            ws.initialised = True
+        if guess is None:
+            qp.solve()
+        else:
+            qp.solve(*guess)
+        results = qp.results
+        status = _PROXQP_STATUS.get(results.info.status.name, NOT_SOLVED)
+        if status == SOLVED and not np.isfinite(results.x).all():
+            status = NOT_FINITE
+        if status == SOLVED:
+            ws.latest = (results.x.copy(), results.y.copy(), results.z.copy())
+        else:
+            ws.initialised, ws.latest = False, None
+        return status, int(results.info.iter)
 
     def _split_forces(self, x: np.ndarray, contacts: list[ContactConstraint]) -> list[np.ndarray]:
         forces, col = [], self.nv
