@@ -134,7 +134,7 @@ class Contact6d(FrameReader, dg.Entity):
         desired = -kp * error - kd * state.frame_velocity(frame, LOCAL)
         return ContactConstraint(self.name, bool(self.active(t)), state.frame_jacobian(frame, LOCAL),
                                  desired - state.frame_drift(frame, LOCAL), self._generator, self._friction,
-                                 self._lower, self._upper, self.force_weight, rotation.copy(), error)
+                                 self._lower, self._upper, self.force_weight, rotation, error)
 
     @dg.output(shape=(6,), depends=("contact",))
     def error(self, t: int) -> np.ndarray:
@@ -147,7 +147,7 @@ class Contact6d(FrameReader, dg.Entity):
         anchored = self.anchor(t) is not None
         self._changed = anchored != bool(self.active(t))
         if self._changed:
-            self.anchor.stage(pin.SE3(self._anchor(t)) if not anchored else None)
+            self.anchor.stage(None if anchored else self._anchor(t))  # frame_placement is a copy
 
     def commit_state(self, t_next: int) -> None:
         """Publish the anchor if it changed."""
