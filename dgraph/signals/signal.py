@@ -324,8 +324,7 @@ class State(Output):
 
     def stage(self, value: Any) -> None:
         """Check and hold ``value`` as the next state (raises :class:`SpecError` here, not at commit)."""
-        staged = exact_float_copy(self.spec, value)  # the common case, without naming the signal
-        self._staged = _coerce(self, value) if staged is None else staged
+        self._staged = _coerce(self, value)
 
     def commit(self, t: int) -> None:
         """Publish the staged value as the state at tick ``t``; invalidate everything downstream."""
@@ -472,7 +471,11 @@ class Input(Signal):
 
 
 def _coerce(sig: Signal, value: Any) -> Any:
-    """``sig.spec.coerce`` with the error attributed to the signal's entity and name."""
+    """``sig.spec.coerce`` with the error attributed to the signal's entity and name (a float
+    array of exactly the declared shape takes the fast path, without building the name)."""
+    array = exact_float_copy(sig.spec, value)
+    if array is not None:
+        return array
     try:
         return sig.spec.coerce(value, sig.full_name)
     except SpecError as exc:

@@ -79,9 +79,6 @@ class Spec:
         """
         if self.dtype == "object":
             return value
-        array = exact_float_copy(self, value)
-        if array is not None:
-            return array
         try:
             if self.shape == () or (self.shape is None and np.ndim(value) == 0):
                 return self._coerce_scalar(value, where)
@@ -156,9 +153,9 @@ _FLOAT64 = np.dtype(np.float64)
 
 
 def exact_float_copy(spec: Spec, value: Any) -> np.ndarray | None:
-    """The fast path of :meth:`Spec.coerce` for the common case: a float64 array of exactly the
-    declared (non-scalar) shape of a float spec, without NaN, gives a copy; anything else (even
-    an equivalent value) gives None, and the general path converts it or raises."""
+    """The fast path that signals take before :meth:`Spec.coerce`: a float64 array of exactly
+    the declared (non-scalar) shape of a float spec, without NaN, gives a copy; anything else
+    (even an equivalent value) gives None, and the general path converts it or raises."""
     if (type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == spec.shape
             and spec.dtype == "float" and value.ndim):
         array = value.copy()
