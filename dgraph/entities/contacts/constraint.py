@@ -11,11 +11,13 @@ import numpy as np
 class ContactConstraint:
     """A contact's rows for the solver (``k`` force variables, ``nv`` accelerations).
 
-    - motion: ``jacobian a = motion_rhs`` (6 x nv, the contact frame's body twist);
+    - motion: ``jacobian a = motion_rhs`` (m x nv: 6 for a plane contact's body twist, 3 for a
+      point);
     - forces: ``f`` (k) produce the contact wrench ``force_generator f`` (6, contact frame),
       hence the generalized force ``jacobian^T force_generator f``;
     - friction and normal-force bounds: ``friction_lower <= friction_matrix f <= friction_upper``;
-    - ``force_weight``: regularisation ``force_weight ||f||^2`` in the cost;
+    - ``force_weight``: the cost ``force_weight ||f - force_reference||^2`` (``force_reference``
+      None: 0, a regularisation; a force task sets it, thesis Eq. 4.12);
     - ``rotation``: the contact frame's orientation in the world (to report world wrenches);
     - ``error``: the contact's placement error that ``motion_rhs`` corrects.
     """
@@ -31,6 +33,7 @@ class ContactConstraint:
     force_weight: float
     rotation: np.ndarray
     error: np.ndarray
+    force_reference: np.ndarray | None = None
 
     @property
     def n_forces(self) -> int:

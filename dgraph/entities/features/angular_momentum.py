@@ -34,4 +34,4 @@ class AngularMomentum(Feature):
         """Momentum error, Jacobian and drift."""
         momentum_matrix = state.centroidal_momentum_matrix[3:]
         return FeatureValue(momentum_matrix @ state.v - self.reference(t), np.zeros(3), momentum_matrix,
-                            state.centroidal_drift[3:], self.reference_rate(t))
+                            state.centroidal_drift[3:], self.reference_rate(t), is_rate=True)

@@ -18,6 +18,9 @@ class FeatureValue:
     ``x_dot = J v`` and ``x_ddot = J a + drift``; ``error = x (-) x*`` (a Lie-group difference
     where ``x`` lives on a group), ``error_velocity = x_dot - x_dot*``, and
     ``reference_acceleration = x_ddot*``.
+
+    ``is_rate`` marks a feature that is already a rate (angular momentum): its ``error`` is a
+    velocity error, regulated by ``kp`` alone (the energy tank stores no energy for it).
     """
 
     error: np.ndarray
@@ -25,13 +28,14 @@ class FeatureValue:
     jacobian: np.ndarray
     drift: np.ndarray
     reference_acceleration: np.ndarray
+    is_rate: bool = False
 
     def select(self, rows: np.ndarray | None) -> FeatureValue:
         """The same feature restricted to ``rows`` (``None``: all)."""
         if rows is None:
             return self
         return FeatureValue(self.error[rows], self.error_velocity[rows], self.jacobian[rows],
-                            self.drift[rows], self.reference_acceleration[rows])
+                            self.drift[rows], self.reference_acceleration[rows], self.is_rate)
 
 
 def parse_mask(entity: dg.Entity, mask: str, width: int) -> np.ndarray | None:

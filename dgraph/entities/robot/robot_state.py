@@ -139,6 +139,11 @@ class RobotState:
         return pin.getFrameAcceleration(self.model, self.data, frame, ref).vector
 
 
+def unactuated_dofs(model: pin.Model) -> int:
+    """Velocities of the unactuated base: 6 for a free flyer as first joint, else 0."""
+    return 6 if model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer" else 0
+
+
 def plugged_model(robot_input: Any) -> pin.Model | None:
     """The Pinocchio model of the RobotModel whose ``state`` feeds ``robot_input`` (or None)."""
     source = robot_input.source

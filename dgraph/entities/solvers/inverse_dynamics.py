@@ -8,8 +8,8 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.contacts.constraint import ContactConstraint
-from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
-from dgraph.entities.solvers.inverse_dynamics_qp import SOLVED, InverseDynamicsQP, QPSolution
+from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model, unactuated_dofs
+from dgraph.entities.solvers.inverse_dynamics_qp import SOLVED, InverseDynamicsQP, Passivity, QPSolution
 from dgraph.entities.tasks.equation import TaskEquation
 
 
@@ -27,6 +27,11 @@ class InverseDynamicsSolver(dg.Entity):
     (0 solved, 1 max iterations, 2 primal infeasible, 3 dual infeasible, 4 not finite,
     5 other) and ``tau`` is the fallback ``g_j(q) - fallback_damping v_j``, clipped to the
     torque limits: gravity compensation with joint damping, never an exception.
+
+    Passive mode (``passive: true``, thesis Eq. 5.34): an input ``passivity`` (an
+    :class:`~dgraph.entities.energy.EnergyTank`'s ``passivity``) scales every task vector and
+    force reference by ``beta gamma`` and adds the row ``-v_j^T tau >= H_dot``. A tank that is
+    disabled hands over scale 1 and no bound: the QP is then the plain one, bit for bit.
 
     Parameters: ``model`` (sizes the ports; the same robot as the RobotModel), ``tasks`` and
     ``contacts`` (names of the inputs to declare, usually the names of the task and contact
@@ -47,6 +52,7 @@ class InverseDynamicsSolver(dg.Entity):
     max_iterations = dg.Param(1000, kind="int", minimum=1, doc="ProxQP iteration limit")
     acceleration_weight = dg.Param(1e-6, kind="float", minimum=0.0, doc="regularisation of a")
     fallback_damping = dg.Param(1.0, kind="float", minimum=0.0, doc="joint damping of the fallback torque")
+    passive = dg.Param(False, kind="bool", doc="declare a passivity input (an energy tank's, Eq. 5.34)")
 
     robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
 
@@ -54,14 +60,15 @@ class InverseDynamicsSolver(dg.Entity):
         """Size the outputs from the model and declare one input per task and per contact."""
         model = load_model(self.model, self.name)
         self.nv = model.nv
-        self.n_unactuated = model.joints[1].nv if model.njoints > 1 and model.joints[1].shortname() == \
-            "JointModelFreeFlyer" else 0
+        self.n_unactuated = unactuated_dofs(model)
         self.na = self.nv - self.n_unactuated
         self.n_contacts = len(self.contacts)
         self._qp = InverseDynamicsQP(self.nv, self.n_unactuated, model.effortLimit[self.n_unactuated:],
                                      eps_abs=self.eps_abs, max_iterations=self.max_iterations,
                                      acceleration_weight=self.acceleration_weight)
         names = list(self.tasks) + list(self.contacts)
+        if self.passive and "passivity" in names:
+            raise dg.ParamError(f"{self.name}: 'passivity' names the tank input of a passive solver", entity=self.name)
         if len(set(names)) != len(names):
             raise dg.ParamError(f"{self.name}: task and contact names must be unique: {names}", entity=self.name)
         for name in names:
@@ -71,6 +78,8 @@ class InverseDynamicsSolver(dg.Entity):
             self.declare(name, dg.Input(dtype="object", doc=f"equation of task {name}"))
         for name in self.contacts:
             self.declare(name, dg.Input(dtype="object", doc=f"constraint of contact {name}"))
+        if self.passive:
+            self.declare("passivity", dg.Input(dtype="object", doc="task scale and storage-rate bound of a tank"))
 
     def setup(self) -> None:
         """Collect the task and contact inputs."""
@@ -125,7 +134,9 @@ class InverseDynamicsSolver(dg.Entity):
         state: RobotState = self.robot(t)
         tasks, contacts = self._read(t)
         active = [row for row, contact in enumerate(contacts) if contact.active]
-        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, [contacts[r] for r in active], t)
+        passivity = self._value(self.passivity, Passivity, t) if self.passive else None
+        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, [contacts[r] for r in active], t,
+                                  passivity)
         solution.contact_rows = active
         if solution.status != SOLVED:
             solution.tau = self.fallback_torque(state)

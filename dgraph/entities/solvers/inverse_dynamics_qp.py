@@ -8,12 +8,19 @@ this with ``tau`` kept as variables (94 instead of 62 variables for TALOS on two
 solve takes 1.9 times as long, docs/control.md).
 
 ```
-min  sum_i ||A_i a - b_i||^2_{W_i} + sum_c w_c ||f_c||^2 + eps ||a||^2
+min  sum_i ||A_i a - s b_i||^2_{W_i} + sum_c w_c ||f_c - s f*_c||^2 + eps ||a||^2
 s.t. M_u a - (J_c^T T)_u f = -h_u                         floating-base dynamics
      J_c a = rhs_c                                         each active contact
      l_c <= C_c f_c <= u_c                                 friction pyramids, normal force
      tau_min - h_j <= M_j a - (J_c^T T)_j f <= tau_max - h_j   torque limits
+     -v_j^T tau >= H_dot                                   passivity (only with a bound)
 ```
+
+``f*_c`` is a contact's force reference (a force task's, thesis Eq. 4.12; 0 otherwise). The
+passive mode of thesis Eq. 5.34 scales every task vector and force reference by
+``s = beta gamma`` (Eq. 5.24) and adds the passivity row, ``-v_j^T tau >= H_dot`` with
+``tau = M_j a + h_j - (J_c^T T)_j f``; with ``s = 1`` and no bound the problem is the plain one,
+bit for bit.
 """
 
 from __future__ import annotations
@@ -39,6 +46,17 @@ _PROXQP_STATUS = {
     "PROXQP_PRIMAL_INFEASIBLE": PRIMAL_INFEASIBLE,
     "PROXQP_DUAL_INFEASIBLE": DUAL_INFEASIBLE,
 }
+
+
+@dataclass(slots=True)
+class Passivity:
+    """What a passive solve needs from an energy tank (thesis Eq. 5.34): the task scale
+    ``beta gamma``, the bound ``H_dot`` on the storage rate (None: no passivity row) and the
+    velocity ``v`` of the port ``-v_j^T tau``."""
+
+    scale: float
+    power_bound: float | None
+    velocity: np.ndarray
 
 
 @dataclass(slots=True)
@@ -107,14 +125,14 @@ class InverseDynamicsQP:
         self._workspaces: dict[tuple[object, ...], _Workspace] = {}
 
     # -- assembly ----------------------------------------------------------------------------
-    def _workspace(self, contacts: list[ContactConstraint]) -> _Workspace:
-        key = tuple((c.name, c.n_forces, len(c.friction_lower)) for c in contacts)
+    def _workspace(self, contacts: list[ContactConstraint], passivity_row: bool) -> _Workspace:
+        key = (passivity_row, *((c.name, c.n_forces, len(c.friction_lower), len(c.motion_rhs)) for c in contacts))
         ws = self._workspaces.get(key)
         if ws is None:
             nf = sum(c.n_forces for c in contacts)
             n = self.nv + nf
-            n_eq = self.nu + 6 * len(contacts)
-            n_in = sum(len(c.friction_lower) for c in contacts) + self.na
+            n_eq = self.nu + sum(len(c.motion_rhs) for c in contacts)
+            n_in = sum(len(c.friction_lower) for c in contacts) + passivity_row + self.na
             qp = proxsuite.proxqp.dense.QP(n, n_eq, n_in)
             qp.settings.eps_abs = self.eps_abs
             qp.settings.eps_rel = 0.0
@@ -143,18 +161,21 @@ class InverseDynamicsQP:
             row, col = row + m, col + k
 
     def assemble(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, tasks: list[TaskEquation],
-                 contacts: list[ContactConstraint]) -> _Workspace:
+                 contacts: list[ContactConstraint], passivity: Passivity | None = None) -> _Workspace:
         """Fill the workspace for this tick's problem (see the module docstring)."""
         nv, nu, na = self.nv, self.nu, self.na
-        ws = self._workspace(contacts)
+        scale = 1.0 if passivity is None else passivity.scale
+        bounded = passivity is not None and passivity.power_bound is not None
+        ws = self._workspace(contacts, bounded)
         # cost on a: sum_i A_i^T W_i A_i and -A_i^T W_i b_i (times 2: ProxQP minimises x^T H x / 2 + g^T x)
         hessian, gradient = 2.0 * self.acceleration_weight * np.eye(nv), np.zeros(nv)
         for task in tasks:
             weighted = task.matrix.T * (2.0 * task.weight)
             hessian += weighted @ task.matrix
-            gradient -= weighted @ task.vector
+            gradient -= weighted @ (task.vector if scale == 1.0 else scale * task.vector)
         ws.H[:nv, :nv] = hessian
         ws.g[:nv] = gradient
+        self._write_force_references(ws, contacts, scale)
         # dynamics (floating-base rows) and torque rows share [M, -J_c^T T]
         ws.A[:nu, :nv] = mass_matrix[:nu]
         ws.b[:nu] = -bias_forces[:nu]
@@ -168,11 +189,25 @@ class InverseDynamicsQP:
             ws.C[-na:, nv:] = -generalized[nu:]
             ws.A[nu:, :nv] = np.vstack([c.jacobian for c in contacts])
             ws.b[nu:] = np.concatenate([c.motion_rhs for c in contacts])
+        if bounded:  # -v_j^T tau >= H_dot, with tau = (torque rows) x + h_j
+            row, velocity = -na - 1, passivity.velocity[nu:]
+            ws.C[row] = -velocity @ ws.C[-na:]
+            ws.lower[row] = passivity.power_bound + velocity @ bias_forces[nu:]
+            ws.upper[row] = INFINITY
         return ws
+
+    def _write_force_references(self, ws: _Workspace, contacts: list[ContactConstraint], scale: float) -> None:
+        """``-2 w_c s f*_c`` in the gradient of the contacts that have a force reference."""
+        col = self.nv
+        for contact in contacts:
+            if contact.force_reference is not None:
+                ws.g[col:col + contact.n_forces] = (-2.0 * contact.force_weight * scale) * contact.force_reference
+            col += contact.n_forces
 
     # -- solving -----------------------------------------------------------------------------
     def solve(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, tasks: list[TaskEquation],
-              contacts: list[ContactConstraint], tick: int | None = None) -> QPSolution:
+              contacts: list[ContactConstraint], tick: int | None = None,
+              passivity: Passivity | None = None) -> QPSolution:
         """Assemble, solve, and recover ``tau``; never raises on a numerical failure (then
         ``status`` says why and ``tau`` is None: the caller chooses the fallback).
 
@@ -181,13 +216,13 @@ class InverseDynamicsQP:
         answer bit for bit.
         """
         start = time.perf_counter()
-        ws = self.assemble(mass_matrix, bias_forces, tasks, contacts)
+        ws = self.assemble(mass_matrix, bias_forces, tasks, contacts, passivity)
         problem = [ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper]
         if tick is None or tick != ws.tick:
             ws.guess, ws.tick, ws.solved = ws.latest, tick, None
         elif ws.solved is not None and all(np.array_equal(a, b) for a, b in zip(problem, ws.solved[0], strict=True)):
             return ws.solved[1]  # the same problem again in this tick: the same answer
-        finite = all(math.isfinite(np.vdot(m, m)) for m in (ws.H, ws.g, ws.A, ws.b, ws.C[-self.na:], ws.lower))
+        finite = all(math.isfinite(np.vdot(m, m)) for m in (ws.H, ws.g, ws.A, ws.b, ws.C[-self.na - 1:], ws.lower))
         status, iterations = self.run(ws, ws.guess) if finite else (NOT_FINITE, 0)
         if status != SOLVED:
             return QPSolution(np.zeros(self.nv), None, [np.zeros(c.n_forces) for c in contacts], status,

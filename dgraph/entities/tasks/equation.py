@@ -6,17 +6,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dgraph.entities.features.feature import FeatureValue
+
 
 @dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
 class TaskEquation:
     """``matrix`` ``A`` (m x nv), ``vector`` ``b`` (m), ``weight`` ``w`` (m, >= 0).
 
-    The solver minimises ``sum_i w_i (A a - b)_i^2`` over the accelerations ``a``.
+    The solver minimises ``sum_i w_i (A a - b)_i^2`` over the accelerations ``a``. A
+    :class:`~dgraph.entities.tasks.Task` also hands over its ``feature`` and gains ``kp``,
+    ``kd`` (vectors), which an energy tank reads to compute the task's stored energy.
     """
 
     matrix: np.ndarray
     vector: np.ndarray
     weight: np.ndarray
+    feature: FeatureValue | None = None
+    kp: np.ndarray | None = None
+    kd: np.ndarray | None = None
 
     def residual(self, acceleration: np.ndarray) -> np.ndarray:
         """``A a - b``."""

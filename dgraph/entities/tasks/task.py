@@ -29,7 +29,7 @@ class Task(dg.Entity):
     Inputs: ``feature`` (a feature's ``feature`` output), ``kp``, ``kd`` (scalar or one gain
     per row, >= 0), ``weight`` (scalar or per row, >= 0; default 1).
     Outputs: ``equation`` (:class:`TaskEquation`, plugged into a solver),
-    ``desired_acceleration`` (``x_ddot_des``).
+    ``desired_acceleration`` (``x_ddot_des``), ``gains`` (``(Kp, Kd)`` vectors).
     """
 
     critical_damping = dg.Param(False, kind="bool", doc="use Kd = 2 sqrt(Kp) instead of a kd input")
@@ -60,16 +60,22 @@ class Task(dg.Entity):
                                f"{type(value).__name__}", entity=self.name, signal="feature")
         return value
 
-    @dg.output(shape=None)
+    @dg.output(dtype="object")
+    def gains(self, t: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(Kp, Kd)`` as vectors of the feature's size."""
+        return self._gains(len(self._feature(t).error), t)
+
+    @dg.output(shape=None, depends=("feature", "gains"))
     def desired_acceleration(self, t: int) -> np.ndarray:
         """``x_ddot* - Kp e - Kd e_dot``."""
         f = self._feature(t)
-        kp, kd = self._gains(len(f.error), t)
+        kp, kd = self.gains(t)
         return f.reference_acceleration - kp * f.error - kd * f.error_velocity
 
-    @dg.output(dtype="object", depends=("feature", "weight", "desired_acceleration"))
+    @dg.output(dtype="object", depends=("feature", "weight", "gains", "desired_acceleration"))
     def equation(self, t: int) -> TaskEquation:
-        """``A = J``, ``b = x_ddot_des - J_dot v``, per-row weights."""
+        """``A = J``, ``b = x_ddot_des - J_dot v``, per-row weights, and the feature and gains."""
         f = self._feature(t)
         weight = self._gain_vectors.vector("weight", len(f.error), t)
-        return TaskEquation(f.jacobian, self.desired_acceleration(t) - f.drift, weight)
+        kp, kd = self.gains(t)
+        return TaskEquation(f.jacobian, self.desired_acceleration(t) - f.drift, weight, f, kp, kd)

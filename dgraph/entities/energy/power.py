@@ -1,0 +1,100 @@
+"""Task storage and tank powers of thesis Ch. 5 (Eqs. 5.5, 5.10, 5.11, 5.18, 5.19), as pure functions.
+
+A *task block* holds what a motion task knows at one tick: ``E = x (-) x*``, ``E_dot``,
+``X_dot = J v``, ``X_ddot*``, ``J_dot v``, the gains and the Jacobian. From it and the mass
+matrix, with ``Lambda = (J M^-1 J^T)^+`` (Eq. 5.5; for a stacked, skinny ``J`` this equals
+``J^+T M J^+``, Eq. 5.10) and ``P = Lambda K_P``:
+
+```
+S      = 1/2 E^T P E                                                   storage (Eq. 5.11)
+S_dot  = E_dot^T P E + 1/2 E^T P_dot E                                  its rate
+B_sig  = X_dot^T Lambda K_D E_dot + X_dot*^T P E - 1/2 E^T P_dot E
+         - X_dot^T Lambda (X_ddot* - J_dot v)                           controllable power (Eq. 5.18)
+```
+
+``X_dot* = X_dot - E_dot``. The uncontrollable power (Eq. 5.19) is
+``B_phi = v^T (C v + g) - sum_k v^T J_k^T T_k f_k`` (:func:`uncontrollable_power`). With
+``a = J^+ beta gamma (X_ddot* - J_dot v - K_P E - K_D E_dot)`` these satisfy the balance
+Eq. 5.25, ``-v^T (M a + h - tau_ext) = beta gamma (S_dot + B_sig) - B_phi``, which
+``tests/entities/energy/test_power.py`` checks.
+
+``P_dot`` is the finite difference of ``P`` over one tick (errata E18); ``S_dot`` is the exact
+rate of ``S`` when ``P`` is symmetric, i.e. when ``K_P = k I`` within the block (errata E4).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+PINV_TOLERANCE = 1e-9
+"""Eigenvalues of ``J M^-1 J^T`` below this fraction of the largest are treated as zero."""
+
+
+@dataclass(slots=True)
+class TaskBlock:
+    """One motion task (or a stack of them) at one tick; vectors have the task's ``m`` rows."""
+
+    error: np.ndarray                   # E = x (-) x*
+    error_velocity: np.ndarray          # E_dot = X_dot - X_dot*
+    velocity: np.ndarray                # X_dot = J v
+    reference_acceleration: np.ndarray  # X_ddot*
+    drift: np.ndarray                   # J_dot v
+    kp: np.ndarray                      # diagonal of K_P
+    kd: np.ndarray                      # diagonal of K_D
+    jacobian: np.ndarray                # J (m x nv)
+
+    @property
+    def reference_velocity(self) -> np.ndarray:
+        """``X_dot* = X_dot - E_dot``."""
+        return self.velocity - self.error_velocity
+
+
+@dataclass(slots=True)
+class TaskPower:
+    """Storage ``S``, its rate ``S_dot`` and the controllable power ``B_sigma`` of a block."""
+
+    storage: float
+    storage_rate: float
+    controllable_power: float
+
+
+def stack(blocks: Sequence[TaskBlock]) -> TaskBlock:
+    """The blocks stacked into one (Eq. 5.8: ``X``, ``J``, ``K_P``, ``K_D`` stacked)."""
+    fields = TaskBlock.__slots__
+    parts = {name: [getattr(b, name) for b in blocks] for name in fields}
+    return TaskBlock(**{name: (np.vstack(v) if name == "jacobian" else np.concatenate(v)) for name, v in parts.items()})
+
+
+def task_space_inertia(jacobian: np.ndarray, mass_matrix_inverse: np.ndarray) -> np.ndarray:
+    """``Lambda = (J M^-1 J^T)^+`` (Eq. 5.5), a symmetric pseudo-inverse by eigen-decomposition."""
+    inverse_inertia = jacobian @ mass_matrix_inverse @ jacobian.T
+    inverse_inertia = 0.5 * (inverse_inertia + inverse_inertia.T)
+    values, vectors = np.linalg.eigh(inverse_inertia)
+    keep = values > PINV_TOLERANCE * max(values[-1], 0.0) if len(values) else values > 0
+    kept = vectors[:, keep]
+    return (kept / values[keep]) @ kept.T
+
+
+def task_power(block: TaskBlock, inertia: np.ndarray, stiffness_rate: np.ndarray) -> TaskPower:
+    """``S``, ``S_dot`` and ``B_sigma`` of a block, given ``Lambda`` and ``P_dot`` (module docstring)."""
+    e, e_dot, x_dot = block.error, block.error_velocity, block.velocity
+    stiffness_e = inertia @ (block.kp * e)                      # P e = Lambda K_P e
+    rate_term = 0.5 * float(e @ stiffness_rate @ e)              # 1/2 E^T P_dot E
+    storage = 0.5 * float(e @ stiffness_e)
+    storage_rate = float(e_dot @ stiffness_e) + rate_term
+    controllable = (float(x_dot @ inertia @ (block.kd * e_dot)) + float(block.reference_velocity @ stiffness_e)
+                    - rate_term - float(x_dot @ inertia @ (block.reference_acceleration - block.drift)))
+    return TaskPower(storage, storage_rate, controllable)
+
+
+def stiffness(block: TaskBlock, inertia: np.ndarray) -> np.ndarray:
+    """``P = Lambda K_P`` (the matrix whose rate ``P_dot`` enters ``S_dot`` and ``B_sigma``)."""
+    return inertia * block.kp
+
+
+def uncontrollable_power(velocity: np.ndarray, bias_forces: np.ndarray, contact_power: float) -> float:
+    """``B_phi = v^T (C v + g) - sum_k (J_k v)^T (T_k f_k)`` (Eq. 5.19); ``contact_power`` is the sum."""
+    return float(velocity @ bias_forces) - contact_power

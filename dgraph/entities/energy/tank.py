@@ -1,0 +1,293 @@
+"""EnergyTank: the global energy tank that makes an inverse-dynamics QP passive (thesis Ch. 5)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.contacts.constraint import ContactConstraint
+from dgraph.entities.energy.power import (
+    TaskBlock,
+    stack,
+    stiffness,
+    task_power,
+    task_space_inertia,
+    uncontrollable_power,
+)
+from dgraph.entities.energy.valves import TankLimits, Valves, valves
+from dgraph.entities.robot.robot_state import RobotState, unactuated_dofs
+from dgraph.entities.solvers.inverse_dynamics_qp import Passivity
+from dgraph.entities.tasks.equation import TaskEquation
+
+
+@dataclass(slots=True)
+class TankStage:
+    """Stage 1 of the passive controller at one tick (thesis §5.3.3, step (1))."""
+
+    storage: float              # S, sum over the tasks
+    storage_rate: float         # S_dot
+    controllable_power: float   # B_sigma, tasks and force tasks
+    uncontrollable_power: float  # B_phi, gravity, Coriolis and contact forces
+    valves: Valves
+    power_bound: float          # H_dot = beta gamma S_dot + E_dot
+    stiffness: dict[Any, np.ndarray] = field(default_factory=dict)  # P = Lambda K_P per task (or stack)
+
+    @property
+    def scale(self) -> float:
+        """``beta gamma``, the scale of every task vector (Eq. 5.24)."""
+        return self.valves.beta * self.valves.gamma
+
+
+def task_block(equation: TaskEquation, velocity: np.ndarray) -> TaskBlock:
+    """The tank's view of a task. A rate feature (angular momentum, ``k_dot = k_dot* - K (k - k*)``)
+    has no position error: its error is ``E_dot`` with ``K_D = K`` and ``K_P = 0`` (so ``S = 0``)."""
+    f = equation.feature
+    x_dot = f.jacobian @ velocity
+    if f.is_rate:
+        zeros = np.zeros_like(f.error)
+        return TaskBlock(zeros, f.error, x_dot, f.reference_acceleration, f.drift, zeros, equation.kp, f.jacobian)
+    return TaskBlock(f.error, f.error_velocity, x_dot, f.reference_acceleration, f.drift, equation.kp,
+                     equation.kd, f.jacobian)
+
+
+@dg.register
+class EnergyTank(dg.Entity):
+    """A global energy tank over a set of tasks (thesis Ch. 5, Eqs. 5.5-5.27), for a passive
+    :class:`~dgraph.entities.solvers.InverseDynamicsSolver` (``passive: true``, Eq. 5.34).
+
+    Stage 1, every tick, from the measured state and the tasks' equations:
+
+    - storage of the tasks ``S = sum 1/2 E^T Lambda K_P E`` and its rate ``S_dot`` (Eq. 5.11), with
+      ``Lambda = (J M^-1 J^T)^+`` per task (Eq. 5.5, ``inertia: per_task``, what the thesis
+      simulated) or over the stacked tasks (Eq. 5.10, ``inertia: stacked``) and
+      ``d(Lambda K_P)/dt`` by finite difference over one tick (errata E18);
+    - controllable power ``B_sigma`` (Eq. 5.18), plus ``(J_F v)^T T_F F_F`` for each contact with
+      a force reference (the force task, with ``F_F`` its desired wrench, errata E17);
+    - uncontrollable power ``B_phi = v^T (C v + g) - sum_k (J_k v)^T T_k f_k`` (Eq. 5.19), with the
+      other contacts' forces ``f_k`` of the previous tick's solution (errata E17);
+    - valves ``gamma`` (power limiter, Eq. 5.21), ``beta`` (output, Eq. 5.22), ``alpha``
+      (overflow, Eq. 5.23), smoothed over ``band`` joules (:mod:`~dgraph.entities.energy.valves`);
+    - planned tank rate ``E_dot = (1 - alpha)(beta gamma B_sigma - B_phi)`` (Eq. 5.20) and the
+      bound ``H_dot = beta gamma S_dot + E_dot`` (Eq. 5.26) for the QP row ``H_dot <= -v_j^T tau``.
+
+    After the solve (the tick's state transition) the tank is integrated from the power the
+    controller actually delivered, ``-v_j^T tau`` with the solver's ``tau`` (fallback included):
+    ``E(t+1) = E(t) + dt (1 - alpha') (-v_j^T tau - beta gamma S_dot)``, where ``alpha' = alpha``
+    only while that flow fills the tank (so ``H_dot <= -v_j^T tau`` holds for the bookkeeping,
+    Eq. 5.27). The energy is stored as ``E = s^2 / 2`` and nothing divides by ``s``. With
+    ``clamp`` the energy is kept in ``[E_min, E_max]`` and what the clamp adds or removes is
+    summed in ``correction`` (it is not passive, so it is shown, not hidden).
+
+    A task whose weights are all zero is out of the stack (its ``Lambda K_P`` history is dropped;
+    re-adding it starts with ``P_dot = 0``); inactive contacts are ignored. With
+    ``enabled: false`` everything is computed and integrated (without clamp) for the record, but
+    the solver gets scale 1 and no bound: the plain QP.
+
+    Parameters: ``tasks``, ``contacts`` (input names), ``maximum_energy`` (5 J),
+    ``minimum_energy`` (0.1 J), ``initial_energy`` (3 J, the pushing scenario), ``power_low``
+    (-0.5 W), ``band`` (J), ``inertia`` (``per_task`` | ``stacked``), ``enabled``, ``clamp``, ``dt``.
+    Inputs: ``robot`` (RobotModel state), one per task (a Task's ``equation``), one per contact
+    (a contact's ``contact``), ``solution`` (the solver's ``solution``: ``tau``, contacts and forces).
+    States: ``energy`` (J), ``correction`` (J added by the clamp so far), ``history``,
+    ``contact_wrenches``.
+    Outputs: ``stage`` (:class:`TankStage`), ``passivity`` (for the solver), ``alpha``, ``beta``,
+    ``gamma``, ``storage``, ``storage_rate``, ``controllable_power``, ``uncontrollable_power``,
+    ``energy_rate`` (planned ``E_dot``), ``power_bound`` (``H_dot``), ``delivered_power``
+    (``-v_j^T tau``, W).
+    """
+
+    has_state = True
+
+    tasks = dg.Param((), kind="str_list", doc="task input names")
+    contacts = dg.Param((), kind="str_list", doc="contact input names")
+    maximum_energy = dg.Param(5.0, kind="float", minimum=0.0, doc="E_max (J)")
+    minimum_energy = dg.Param(0.1, kind="float", minimum=0.0, doc="E_min (J)")
+    initial_energy = dg.Param(3.0, kind="float", minimum=0.0, doc="E(0) (J)")
+    power_low = dg.Param(-0.5, kind="float", maximum=0.0, doc="P_low (W, <= 0): the tasks' largest draw")
+    band = dg.Param(0.1, kind="float", minimum=0.0, doc="smoothing band of beta and alpha (J; 0: hard)")
+    inertia = dg.Param("per_task", kind="str", choices=("per_task", "stacked"), doc="Lambda per task or stacked")
+    enabled = dg.Param(True, kind="bool", doc="false: compute and record, but leave the solver plain")
+    clamp = dg.Param(True, kind="bool", doc="keep E in [E_min, E_max], summing the correction")
+    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+
+    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+    solution = dg.Input(dtype="object", doc="the solver's solution (tau, contacts, forces), read after the solve")
+    energy = dg.State(shape=(), doc="tank energy E = s^2 / 2 (J)")
+    correction = dg.State(shape=(), initial=0.0, doc="energy added by the clamp so far (J)")
+    history = dg.State(dtype="object", doc="Lambda K_P of the previous tick, per task (or stack)")
+    contact_wrenches = dg.State(dtype="object", doc="contact wrenches T_k f_k of the previous solution, by name")
+
+    def configure(self) -> None:
+        """Check the limits and declare one input per task and contact, and ``stage``."""
+        if not self.minimum_energy < self.maximum_energy:
+            raise dg.ParamError(f"{self.name}: minimum_energy must be below maximum_energy", entity=self.name)
+        if not self.minimum_energy <= self.initial_energy <= self.maximum_energy:
+            raise dg.ParamError(f"{self.name}: initial_energy must be in [minimum_energy, maximum_energy]",
+                                entity=self.name)
+        if self.band > self.maximum_energy - self.minimum_energy:
+            raise dg.ParamError(f"{self.name}: band is wider than [minimum_energy, maximum_energy]", entity=self.name)
+        self.limits = TankLimits(self.minimum_energy, self.maximum_energy, self.power_low, self.band)
+        names = [*self.tasks, *self.contacts]
+        if len(set(names)) != len(names):
+            raise dg.ParamError(f"{self.name}: task and contact names must be unique: {names}", entity=self.name)
+        for name in names:
+            if not name.isidentifier() or hasattr(type(self), name):
+                raise dg.ParamError(f"{self.name}: {name!r} cannot name an input of the tank", entity=self.name)
+            self.declare(name, dg.Input(dtype="object", doc=f"equation or constraint {name}"))
+        self.declare("stage", dg.Output(type(self)._compute_stage, dtype="object",
+                                        depends=("robot", *names, "energy", "history", "contact_wrenches"),
+                                        doc="stage 1: storage, powers, valves, H_dot bound"))
+
+    def reset(self) -> None:
+        """Initial energy, no history."""
+        super().reset()
+        self.energy.set(self.initial_energy, 0)
+        self.history.set({}, 0)
+        self.contact_wrenches.set({}, 0)
+
+    def setup(self) -> None:
+        """Collect the task and contact inputs."""
+        self._task_inputs = [getattr(self, n) for n in self.tasks]
+        self._contact_inputs = [getattr(self, n) for n in self.contacts]
+
+    # -- stage 1 ------------------------------------------------------------------------------
+    def _read(self, inp: dg.Input, kind: type, t: int) -> Any:
+        value = inp(t)
+        if not isinstance(value, kind):
+            raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: expected a {kind.__name__}, got "
+                               f"{type(value).__name__}", entity=self.name, signal=inp.name)
+        if kind is TaskEquation and (value.feature is None or value.kp is None or value.kd is None):
+            raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: the equation carries no feature and gains "
+                               "(plug a Task's equation)", entity=self.name, signal=inp.name)
+        return value
+
+    def _blocks(self, velocity: np.ndarray, t: int) -> dict[Any, TaskBlock]:
+        """The active tasks' blocks, by name (or one stacked block keyed by the names)."""
+        blocks = {}
+        for inp in self._task_inputs:
+            equation = self._read(inp, TaskEquation, t)
+            if equation.weight.any():
+                blocks[inp.name] = task_block(equation, velocity)
+        if self.inertia == "stacked" and blocks:
+            return {tuple(blocks): stack(list(blocks.values()))}
+        return blocks
+
+    def _compute_stage(self, t: int) -> TankStage:
+        state: RobotState = self.robot(t)
+        v = state.v
+        inverse_mass = np.linalg.inv(state.mass_matrix)
+        previous = self.history(t)
+        storage = storage_rate = controllable = 0.0
+        stiffnesses = {}
+        for key, block in self._blocks(v, t).items():
+            inertia = task_space_inertia(block.jacobian, inverse_mass)
+            p = stiffnesses[key] = stiffness(block, inertia)
+            before = previous.get(key)
+            rate = (p - before) / self.dt if before is not None and before.shape == p.shape else np.zeros_like(p)
+            power = task_power(block, inertia, rate)
+            storage, storage_rate = storage + power.storage, storage_rate + power.storage_rate
+            controllable += power.controllable_power
+        contact_power = 0.0
+        wrenches = self.contact_wrenches(t)
+        for inp in self._contact_inputs:
+            contact = self._read(inp, ContactConstraint, t)
+            if not contact.active:
+                continue
+            twist = contact.jacobian @ v
+            if contact.force_reference is not None:  # a force task: controllable (Eq. 5.18)
+                controllable += float(twist @ (contact.force_generator @ contact.force_reference))
+            elif contact.name in wrenches:
+                contact_power += float(twist @ wrenches[contact.name])
+        uncontrollable = uncontrollable_power(v, state.bias_forces, contact_power)
+        tank = valves(float(self.energy(t)), controllable, uncontrollable, self.limits)
+        bound = tank.beta * tank.gamma * storage_rate + tank.energy_rate
+        return TankStage(storage, storage_rate, controllable, uncontrollable, tank, bound, stiffnesses)
+
+    # -- outputs -------------------------------------------------------------------------------
+    @dg.output(dtype="object", depends=("stage", "robot"))
+    def passivity(self, t: int) -> Passivity:
+        """Scale ``beta gamma`` and bound ``H_dot`` for a passive solver (scale 1, no bound when disabled)."""
+        if not self.enabled:
+            return Passivity(1.0, None, self.robot(t).v)
+        stage = self.stage(t)
+        return Passivity(stage.scale, stage.power_bound, self.robot(t).v)
+
+    @dg.output(shape=(), depends=("stage",))
+    def alpha(self, t: int) -> float:
+        """Overflow valve (Eq. 5.23)."""
+        return self.stage(t).valves.alpha
+
+    @dg.output(shape=(), depends=("stage",))
+    def beta(self, t: int) -> float:
+        """Output valve (Eq. 5.22)."""
+        return self.stage(t).valves.beta
+
+    @dg.output(shape=(), depends=("stage",))
+    def gamma(self, t: int) -> float:
+        """Power limiter (Eq. 5.21)."""
+        return self.stage(t).valves.gamma
+
+    @dg.output(shape=(), depends=("stage",))
+    def storage(self, t: int) -> float:
+        """``S`` (J)."""
+        return self.stage(t).storage
+
+    @dg.output(shape=(), depends=("stage",))
+    def storage_rate(self, t: int) -> float:
+        """``S_dot`` (W)."""
+        return self.stage(t).storage_rate
+
+    @dg.output(shape=(), depends=("stage",))
+    def controllable_power(self, t: int) -> float:
+        """``B_sigma`` (W)."""
+        return self.stage(t).controllable_power
+
+    @dg.output(shape=(), depends=("stage",))
+    def uncontrollable_power(self, t: int) -> float:
+        """``B_phi`` (W)."""
+        return self.stage(t).uncontrollable_power
+
+    @dg.output(shape=(), depends=("stage",))
+    def energy_rate(self, t: int) -> float:
+        """Planned ``E_dot = (1 - alpha)(beta gamma B_sigma - B_phi)`` (W)."""
+        return self.stage(t).valves.energy_rate
+
+    @dg.output(shape=(), depends=("stage",))
+    def power_bound(self, t: int) -> float:
+        """``H_dot``, which the QP keeps below ``-v_j^T tau`` (W)."""
+        return self.stage(t).power_bound
+
+    @dg.output(shape=(), depends=("robot", "solution"))
+    def delivered_power(self, t: int) -> float:
+        """``-v_j^T tau`` of the torque the solver sent (W)."""
+        state: RobotState = self.robot(t)
+        return -float(state.v[unactuated_dofs(state.model):] @ self.solution(t).tau)
+
+    # -- integration after the solve ----------------------------------------------------------
+    def prepare_state(self, t: int) -> None:
+        """Integrate the tank from the delivered power; keep ``Lambda K_P`` and the contact wrenches."""
+        stage = self.stage(t)
+        flow = self.delivered_power(t) - stage.scale * stage.storage_rate
+        alpha = stage.valves.alpha if flow > 0.0 else 0.0
+        energy = float(self.energy(t)) + self.dt * (1.0 - alpha) * flow
+        if not math.isfinite(energy):
+            raise dg.ComputeError(f"{self.name}: tank energy is not finite at tick {t} (delivered power "
+                                  f"{self.delivered_power(t)}, S_dot {stage.storage_rate})", entity=self.name,
+                                  signal="energy")
+        kept = min(max(energy, self.minimum_energy), self.maximum_energy) if self.clamp and self.enabled else energy
+        self.energy.stage(kept)
+        self.correction.stage(float(self.correction(t)) + kept - energy)
+        self.history.stage(stage.stiffness)
+        solution = self.solution(t)
+        self.contact_wrenches.stage({c.name: c.force_generator @ f for c, f in
+                                     zip(solution.contacts, solution.forces, strict=True)
+                                     if c.force_reference is None})
+
+    def commit_state(self, t_next: int) -> None:
+        """Publish the new energy, correction and histories."""
+        for state in (self.energy, self.correction, self.history, self.contact_wrenches):
+            state.commit(t_next)
