@@ -13,6 +13,15 @@ A graph file::
       kp.gain: 25.0
     record: [robot.q]          # shorthand for a Recorder entity named "recorder"
 
+A file can also be a variant of another: ``extends`` (a path relative to the file) and
+``overrides`` (``entity.name: value`` pairs, parameters or input constants, as
+``dgraph run --set``), with its own ``name`` and ``duration``::
+
+    extends: talos_push_tank.yaml
+    name: talos_push_no_tank
+    overrides:
+      tank.enabled: false
+
 Safety: the YAML is composed with the safe loader and converted node by node; only plain
 scalars, lists and mappings are accepted (no tags, anchors, aliases or merge keys), so a file
 can never construct objects or run code. Entity types come only from the registry. Every
@@ -63,6 +72,20 @@ SCHEMA: dict[str, Any] = {
         "record": {"type": "array", "items": {"type": "string", "pattern": SIGNAL_RE}},
     },
 }
+
+EXTENSION_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "additionalProperties": False,
+    "required": ["extends"],
+    "properties": {
+        "extends": {"type": "string", "minLength": 1},
+        "name": {"type": "string", "minLength": 1},
+        "duration": {"type": "number", "minimum": 0},
+        "overrides": {"type": "object", "propertyNames": {"pattern": SIGNAL_RE}},
+    },
+}
+MAX_EXTENDS = 4
+"""Longest chain of files extending one another (a longer one is taken for a cycle)."""
 
 _INT, _FLOAT = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float"
 MAX_NUMBER_CHARS = 64
@@ -167,7 +190,8 @@ def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], _Document]
             loader.dispose()
     if not isinstance(data, dict):
         raise GraphFileError("a graph file must be a mapping with an 'entities' key", file=file, line=1)
-    errors = sorted(jsonschema.Draft202012Validator(SCHEMA).iter_errors(data), key=lambda e: list(e.absolute_path))
+    schema = EXTENSION_SCHEMA if "extends" in data else SCHEMA
+    errors = sorted(jsonschema.Draft202012Validator(schema).iter_errors(data), key=lambda e: list(e.absolute_path))
     if errors:
         err = jsonschema.exceptions.best_match(errors)
         message, path = _schema_message(err)
@@ -217,6 +241,8 @@ def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = 
     """Build a graph from graph-file text (see :func:`load`)."""
     data, doc = parse(text, file)
     try:
+        if "extends" in data:
+            return _extend(data, doc, dict(overrides or {}))
         return _build(data, doc, dict(overrides or {}))
     except GraphFileError:
         raise
@@ -224,6 +250,29 @@ def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = 
         raise GraphFileError(str(exc), file=file, entity=exc.entity, signal=exc.signal) from exc
     except (ValueError, TypeError, OverflowError, MemoryError) as exc:  # a value no check foresaw
         raise GraphFileError(f"could not build the graph: {type(exc).__name__}: {exc}", file=file) from exc
+
+
+def _extend(data: dict[str, Any], doc: _Document, overrides: dict[str, Any], depth: int = 1) -> Graph:
+    """Build the file that ``data`` extends, with its name, duration and overrides (the command
+    line's ``overrides`` win)."""
+    if depth > MAX_EXTENDS:
+        raise doc.error(f"more than {MAX_EXTENDS} files extend one another (a cycle?)", ("extends",))
+    base_file = Path(doc.file).parent / data["extends"]
+    try:
+        base, base_doc = parse(read_text(base_file), str(base_file))
+    except GraphFileError as exc:
+        raise doc.error(f"cannot extend {data['extends']!r}: {exc}", ("extends",)) from None
+    for key in ("name", "duration"):
+        if key in data:
+            base[key] = data[key]
+    own = data.get("overrides", {})
+    if "extends" not in base:
+        entities = declared_entities(base)
+        for key in own:
+            if key.partition(".")[0] not in entities:
+                raise doc.error(f"no entity {key.partition('.')[0]!r} in {base_file}", ("overrides", key))
+        return _build(base, base_doc, {**own, **overrides})
+    return _extend(base, base_doc, {**own, **overrides}, depth + 1)
 
 
 def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> Graph:

@@ -31,6 +31,7 @@ import mujoco
 import numpy as np
 
 import dgraph as dg
+from sim.disturbances import Removals
 from sim.model import SimModel, load
 from sim.robots import ROBOTS
 from sim.scenes import SCENES
@@ -80,6 +81,8 @@ class MujocoDevice(dg.Device):
     v0 = dg.Param(None, kind="vector", doc="initial velocity, nv (default: zeros)")
     dt = dg.Param(None, kind="float", minimum=1e-6, maximum=1.0, doc="time step in s (default: the graph's dt)")
     wrench_bodies = dg.Param([], kind="str_list", doc="bodies getting a wrench_<body> input (world frame, at CoM)")
+    remove_bodies = dg.Param([], kind="str_list", doc="scene mocap bodies removed during the run (unannounced)")
+    remove_times = dg.Param([], kind="vector", doc="time (s) at which each of remove_bodies is removed")
     fall_height = dg.Param(0.6, kind="float", doc="base height (m) under which fallen is true")
     stop_on_fall = dg.Param(False, kind="bool", doc="raise a DGraphError when the robot falls")
     video_path = dg.Param(None, kind="str", doc="record a video (.gif, .webp or .png) written at close")
@@ -148,9 +151,14 @@ class MujocoDevice(dg.Device):
             self._wrenches.append((body_id, port))
 
     def setup(self) -> None:
-        """MuJoCo data, buffers and the video hook."""
+        """MuJoCo data, buffers, removals and the video hook."""
         m = self.mj_model
         self.data = mujoco.MjData(m)
+        try:
+            self._removals = Removals(m, self.remove_bodies, np.atleast_1d(self.remove_times)) \
+                if self.remove_bodies or np.size(self.remove_times) else None
+        except ValueError as exc:
+            raise dg.ParamError(f"{self.name}: {exc}", entity=self.name) from None
         self._saved = np.zeros(mujoco.mj_stateSize(m, _STATE))
         self._pending = False
         self._warning_counts = [0, 0, 0]
@@ -256,6 +264,8 @@ class MujocoDevice(dg.Device):
                 raise dg.DGraphError(f"{self.name}: non-finite {port} at tick {t}", entity=self.name, signal=port)
         mujoco.mj_getState(m, d, self._saved, _STATE)
         self._pending = True
+        if self._removals is not None:
+            self._removals.apply(d, t * dt)
         if self._ctrl_identity:
             self._ctrl[:] = tau
         else:

@@ -55,11 +55,18 @@ class Scene:
             group=SCENE_GROUP)
 
     def box(self, name: str, size: Sequence[float], pos: Sequence[float], *, free: bool = False,
-            mass: float = 1.0, friction: float = 1.0, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0,
-            rgba: Sequence[float] = (0.6, 0.45, 0.3, 1.0)) -> mujoco.MjsGeom:
-        """A box of full ``size`` (x, y, z) centred at ``pos``; ``free=True`` makes it a movable block."""
+            mocap: bool = False, mass: float = 1.0, friction: float = 1.0, roll: float = 0.0, pitch: float = 0.0,
+            yaw: float = 0.0, rgba: Sequence[float] = (0.6, 0.45, 0.3, 1.0)) -> mujoco.MjsGeom:
+        """A box of full ``size`` (x, y, z) centred at ``pos``; ``free=True`` makes it a movable block,
+        ``mocap=True`` a static block that a simulation can move or remove (body ``name``,
+        :mod:`sim.disturbances`)."""
         half = [s / 2.0 for s in size]
         quat = _quat_from_rpy(roll, pitch, yaw)
+        if mocap:
+            body = self.spec.worldbody.add_body(name=name, pos=list(pos), quat=quat, mocap=True)
+            return body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_BOX, size=half,
+                                 friction=[friction, 0.005, 0.0001], rgba=list(rgba), contype=1, conaffinity=1,
+                                 group=SCENE_GROUP)
         if free:
             body = self.spec.worldbody.add_body(name=name, pos=list(pos), quat=quat)
             body.add_freejoint(name=f"{name}_free")
@@ -85,6 +92,17 @@ class Scene:
                  pitch: float = 0.0) -> mujoco.MjsGeom:
         """A static tilted box (full ``size``) centred at ``pos``, rotated by ``roll`` then ``pitch`` (rad)."""
         return self.box(name, size, pos, roll=roll, pitch=pitch)
+
+    def tool(self, body: str, start: Sequence[float], end: Sequence[float], radius: float,
+             name: str = "tool") -> mujoco.MjsGeom:
+        """A massless cylinder held by a robot ``body`` from ``start`` to ``end`` (body frame), touching
+        the scene but not the robot, with a site ``<name>_tip`` at ``end``. Massless, so the robot's
+        Pinocchio model stays exact."""
+        robot_body = self.spec.body(body)
+        robot_body.add_site(name=f"{name}_tip", pos=list(end), size=[0.005, 0.005, 0.005], group=4)
+        return robot_body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER, fromto=[*start, *end],
+                                   size=[radius, 0.0, 0.0], mass=0.0, density=0.0, rgba=[0.2, 0.2, 0.25, 1.0],
+                                   friction=[0.5, 0.005, 0.0001], contype=1, conaffinity=0, group=SCENE_GROUP)
 
     def light(self, pos: Sequence[float] = (0.0, -1.0, 4.0), direction: Sequence[float] = (0.0, 0.3, -1.0),
               ) -> mujoco.MjsLight:
@@ -140,7 +158,27 @@ def slope(scene: Scene) -> None:
     scene.platform("slope", size=(1.0, 1.0, 0.05), pos=(1.5, 0.0, 0.05), pitch=-0.1)
 
 
-SCENES: dict[str, Callable[[Scene], None]] = {"flat": flat, "block": block, "stairs": stairs, "slope": slope}
+PUSH_BLOCK_TOP = 0.58
+"""Height (m) of the top of the ``push`` scene's block."""
+LEFT_TOOL_TIP = (0.0, 0.0, -0.2)
+"""The ``push`` tool's tip in TALOS's ``gripper_left_base_link`` frame (along the fingers, 8 cm
+beyond their tips), where ``graphs/talos_push_tank.yaml`` puts the Pinocchio frame
+``left_tool_tip``. The tool is on the gripper, beyond the wrist force/torque sensor, which
+therefore measures the push."""
+
+
+def push(scene: Scene) -> None:
+    """TALOS's left hand holds a 0.14 m tool (a cylinder along the fingers) above a table-height block
+    (0.2 x 0.2 x 0.58 m, a mocap body named ``block`` that :mod:`sim.disturbances` can remove); the
+    block's top is 2.2 cm under the tool tip at half-sitting (thesis §5.4.1)."""
+    scene.floor(friction=1.0)
+    scene.tool("gripper_left_base_link", start=(0.0, 0.0, -0.06), end=LEFT_TOOL_TIP, radius=0.015)
+    scene.box("block", size=(0.2, 0.2, PUSH_BLOCK_TOP), pos=(0.18, 0.49, PUSH_BLOCK_TOP / 2.0), mocap=True,
+              friction=0.5, rgba=(0.55, 0.6, 0.7, 1.0))
+
+
+SCENES: dict[str, Callable[[Scene], None]] = {"flat": flat, "block": block, "stairs": stairs, "slope": slope,
+                                              "push": push}
 """Scenes by name (the robot's light and tracking camera are added by :func:`add_scene`)."""
 
 

@@ -2,5 +2,6 @@
 
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.contacts.contact6d import Contact6d
+from dgraph.entities.contacts.point_contact import PointContact
 
-__all__ = ["Contact6d", "ContactConstraint"]
+__all__ = ["Contact6d", "ContactConstraint", "PointContact"]

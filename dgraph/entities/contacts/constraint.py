@@ -41,6 +41,8 @@ class ContactConstraint:
         return self.force_generator.shape[1]
 
     def world_wrench(self, forces: np.ndarray) -> np.ndarray:
-        """The contact wrench ``[force, torque]`` at the contact frame origin, world axes."""
+        """The contact wrench ``[force, torque]`` at the contact frame origin, world axes (a point
+        contact, whose generator gives a force only, has no torque)."""
         wrench = self.force_generator @ forces
-        return np.concatenate([self.rotation @ wrench[:3], self.rotation @ wrench[3:]])
+        torque = self.rotation @ wrench[3:] if len(wrench) == 6 else np.zeros(3)
+        return np.concatenate([self.rotation @ wrench[:3], torque])

@@ -68,14 +68,41 @@ def stack(blocks: Sequence[TaskBlock]) -> TaskBlock:
     return TaskBlock(**{name: (np.vstack(v) if name == "jacobian" else np.concatenate(v)) for name, v in parts.items()})
 
 
-def task_space_inertia(jacobian: np.ndarray, mass_matrix_inverse: np.ndarray) -> np.ndarray:
-    """``Lambda = (J M^-1 J^T)^+`` (Eq. 5.5), a symmetric pseudo-inverse by eigen-decomposition."""
-    inverse_inertia = jacobian @ mass_matrix_inverse @ jacobian.T
-    inverse_inertia = 0.5 * (inverse_inertia + inverse_inertia.T)
-    values, vectors = np.linalg.eigh(inverse_inertia)
+def _pseudo_inverse(symmetric: np.ndarray) -> np.ndarray:
+    """Moore-Penrose inverse of a symmetric PSD matrix (eigen-decomposition; the rare path)."""
+    values, vectors = np.linalg.eigh(0.5 * (symmetric + symmetric.T))
     keep = values > PINV_TOLERANCE * max(values[-1], 0.0) if len(values) else values > 0
     kept = vectors[:, keep]
     return (kept / values[keep]) @ kept.T
+
+
+def _well_conditioned(symmetric: np.ndarray) -> bool:
+    """True when ``symmetric`` is positive definite with a Cholesky factor of bounded ratio."""
+    try:
+        diagonal = np.diag(np.linalg.cholesky(symmetric))
+    except np.linalg.LinAlgError:
+        return False
+    return bool(diagonal.min() ** 2 > PINV_TOLERANCE * diagonal.max() ** 2)
+
+
+def task_space_inertia(jacobian: np.ndarray, mass_matrix: np.ndarray, mass_matrix_inverse: np.ndarray) -> np.ndarray:
+    """``Lambda = (J M^-1 J^T)^+`` (Eq. 5.5).
+
+    A fat ``J`` of full row rank (one task) gives the plain inverse; a skinny ``J`` of full column
+    rank (stacked tasks) gives ``J^+T M J^+`` with ``J^+ = (J^T J)^-1 J^T`` (Eqs. 5.9-5.10); the
+    rank-deficient cases fall back to an eigen-decomposition (slow with a multithreaded BLAS).
+    """
+    rows, cols = jacobian.shape
+    if rows <= cols:
+        inverse_inertia = jacobian @ mass_matrix_inverse @ jacobian.T
+        if _well_conditioned(inverse_inertia):
+            return np.linalg.inv(inverse_inertia)
+        return _pseudo_inverse(inverse_inertia)
+    gram = jacobian.T @ jacobian
+    if _well_conditioned(gram):
+        j_pinv = np.linalg.solve(gram, jacobian.T)
+        return j_pinv.T @ mass_matrix @ j_pinv
+    return _pseudo_inverse(jacobian @ mass_matrix_inverse @ jacobian.T)
 
 
 def task_power(block: TaskBlock, inertia: np.ndarray, stiffness_rate: np.ndarray) -> TaskPower:

@@ -184,7 +184,7 @@ class EnergyTank(dg.Entity):
         storage = storage_rate = controllable = 0.0
         stiffnesses = {}
         for key, block in self._blocks(v, t).items():
-            inertia = task_space_inertia(block.jacobian, inverse_mass)
+            inertia = task_space_inertia(block.jacobian, state.mass_matrix, inverse_mass)
             p = stiffnesses[key] = stiffness(block, inertia)
             before = previous.get(key)
             rate = (p - before) / self.dt if before is not None and before.shape == p.shape else np.zeros_like(p)

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+import pinocchio as pin
 
 import dgraph as dg
 from dgraph.entities.robot.robot_state import RobotState, homogeneous, load_model
@@ -36,6 +39,29 @@ def _frame_outputs(frame: str, frame_id: int) -> dict[str, dg.Output]:
     }
 
 
+def with_tool_frames(model: pin.Model, tool_frames: Any, entity: str) -> pin.Model:
+    """A copy of ``model`` with operational frames ``{name: {parent: frame, translation: [x, y, z]}}``
+    (fixed offsets from an existing frame, same axes), e.g. the tip of a tool held in a hand."""
+    if not isinstance(tool_frames, dict):
+        raise dg.ParamError(f"{entity}: tool_frames must map names to {{parent, translation}}", entity=entity)
+    model = pin.Model(model)
+    for name, spec in tool_frames.items():
+        if not (isinstance(name, str) and name.isidentifier()) or model.existFrame(name):
+            raise dg.ParamError(f"{entity}: tool frame {name!r} must be a new identifier", entity=entity)
+        if not isinstance(spec, dict) or set(spec) != {"parent", "translation"}:
+            raise dg.ParamError(f"{entity}: tool frame {name!r} needs exactly 'parent' and 'translation'",
+                                entity=entity)
+        translation = np.asarray(spec["translation"], dtype=float)
+        if not model.existFrame(str(spec["parent"])) or translation.shape != (3,) or not np.isfinite(translation).all():
+            raise dg.ParamError(f"{entity}: tool frame {name!r}: parent {spec['parent']!r} must be a frame of the "
+                                "model and translation 3 finite numbers", entity=entity)
+        parent = model.frames[model.getFrameId(str(spec["parent"]))]
+        placement = parent.placement * pin.SE3(np.eye(3), translation)
+        model.addFrame(pin.Frame(name, parent.parentJoint, model.getFrameId(str(spec["parent"])), placement,
+                                 pin.FrameType.OP_FRAME))
+    return model
+
+
 @dg.register
 class RobotModel(dg.Entity):
     """Rigid-body model of a robot (Pinocchio): one shared computation per tick.
@@ -58,11 +84,14 @@ class RobotModel(dg.Entity):
       world axes at the frame origin (see :mod:`dgraph.entities.robot.robot_state`).
 
     Parameters: ``model`` (example-robot-data name, default ``talos``, or a ``pin.Model``),
-    ``frames`` (frame names whose kinematics are published).
+    ``frames`` (frame names whose kinematics are published), ``tool_frames`` (extra frames at
+    fixed offsets, ``{name: {parent: frame, translation: [x, y, z]}}``, e.g. a tool tip; the
+    model is then this entity's own copy).
     """
 
     model = dg.Param("talos", kind="object", doc="example-robot-data robot name or pinocchio.Model")
     frames = dg.Param((), kind="str_list", doc="frames whose placement, velocity, Jacobian and drift are outputs")
+    tool_frames = dg.Param(None, kind="object", doc="extra frames: {name: {parent: frame, translation: [x, y, z]}}")
 
     q = dg.Input(shape=("nq",), doc="configuration (Pinocchio convention)")
     v = dg.Input(shape=("nv",), doc="generalized velocity (Pinocchio convention)")
@@ -70,6 +99,8 @@ class RobotModel(dg.Entity):
     def configure(self) -> None:
         """Load the model and declare the per-frame outputs."""
         self.pin_model = load_model(self.model, self.name)
+        if self.tool_frames:
+            self.pin_model = with_tool_frames(self.pin_model, self.tool_frames, self.name)
         self.nq, self.nv = self.pin_model.nq, self.pin_model.nv
         self._data = self.pin_model.createData()
         for frame in self.frames:

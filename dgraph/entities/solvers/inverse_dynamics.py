@@ -31,7 +31,10 @@ class InverseDynamicsSolver(dg.Entity):
     Passive mode (``passive: true``, thesis Eq. 5.34): an input ``passivity`` (an
     :class:`~dgraph.entities.energy.EnergyTank`'s ``passivity``) scales every task vector and
     force reference by ``beta gamma`` and adds the row ``-v_j^T tau >= H_dot``. A tank that is
-    disabled hands over scale 1 and no bound: the QP is then the plain one, bit for bit.
+    disabled hands over scale 1 and no bound: the QP is then the plain one, bit for bit. When
+    the passive QP fails, it is solved again without the passivity row (``passivity_relaxed``
+    is true for that tick: the tank, integrated from the delivered power, pays for it), and
+    only if that fails too does the fallback act.
 
     Parameters: ``model`` (sizes the ports; the same robot as the RobotModel), ``tasks`` and
     ``contacts`` (names of the inputs to declare, usually the names of the task and contact
@@ -42,7 +45,7 @@ class InverseDynamicsSolver(dg.Entity):
     Outputs: ``solution`` (everything below, computed once), ``tau`` (actuated torques),
     ``acceleration`` (nv), ``contact_wrenches`` (one row ``[force, torque]`` per contact,
     world axes at the contact frame; zeros when inactive), ``normal_force_total`` (sum of the
-    world-z contact forces), ``status``, ``iterations``, ``solve_time`` (s).
+    world-z contact forces), ``status``, ``passivity_relaxed``, ``iterations``, ``solve_time`` (s).
     """
 
     model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the ports)")
@@ -135,8 +138,12 @@ class InverseDynamicsSolver(dg.Entity):
         tasks, contacts = self._read(t)
         active = [row for row, contact in enumerate(contacts) if contact.active]
         passivity = self._value(self.passivity, Passivity, t) if self.passive else None
-        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, [contacts[r] for r in active], t,
-                                  passivity)
+        active_contacts = [contacts[r] for r in active]
+        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, active_contacts, t, passivity)
+        if solution.status != SOLVED and passivity is not None and passivity.power_bound is not None:
+            relaxed = Passivity(passivity.scale, None, passivity.velocity)
+            solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, active_contacts, t, relaxed)
+            solution.passivity_relaxed = True
         solution.contact_rows = active
         if solution.status != SOLVED:
             solution.tau = self.fallback_torque(state)
@@ -170,6 +177,11 @@ class InverseDynamicsSolver(dg.Entity):
     def status(self, t: int) -> int:
         """0 when solved; see the class docstring for the failure codes."""
         return self.solution(t).status
+
+    @dg.output(shape=(), dtype="bool", depends=("solution",))
+    def passivity_relaxed(self, t: int) -> bool:
+        """True when the passive QP failed and was solved without its passivity row."""
+        return self.solution(t).passivity_relaxed
 
     @dg.output(shape=(), dtype="int", depends=("solution",))
     def iterations(self, t: int) -> int:

@@ -77,6 +77,7 @@ class QPSolution:
     objective: float = 0.0
     contacts: list[ContactConstraint] = field(default_factory=list)
     contact_rows: list[int] = field(default_factory=list)  # which declared contact each one is (set by the entity)
+    passivity_relaxed: bool = False  # solved again without the passivity row (set by the entity)
 
 
 @dataclass(slots=True)
@@ -189,12 +190,25 @@ class InverseDynamicsQP:
             ws.C[-na:, nv:] = -generalized[nu:]
             ws.A[nu:, :nv] = np.vstack([c.jacobian for c in contacts])
             ws.b[nu:] = np.concatenate([c.motion_rhs for c in contacts])
-        if bounded:  # -v_j^T tau >= H_dot, with tau = (torque rows) x + h_j
-            row, velocity = -na - 1, passivity.velocity[nu:]
-            ws.C[row] = -velocity @ ws.C[-na:]
-            ws.lower[row] = passivity.power_bound + velocity @ bias_forces[nu:]
-            ws.upper[row] = INFINITY
+        if bounded:
+            self._write_passivity_row(ws, passivity, bias_forces)
         return ws
+
+    def _write_passivity_row(self, ws: _Workspace, passivity: Passivity, bias_forces: np.ndarray) -> None:
+        """``-v_j^T tau >= H_dot`` with ``tau = (torque rows) x + h_j``, divided by the row's norm
+        (the preconditioner is kept from the first solve: a row whose scale follows ``|v|`` would
+        drift out of it). A zero row (``v = 0``) with ``H_dot <= 0`` holds for every ``x``."""
+        velocity = passivity.velocity[self.nu:]
+        row = -velocity @ ws.C[-self.na:]
+        bound = passivity.power_bound + velocity @ bias_forces[self.nu:]
+        norm = math.sqrt(row @ row)
+        if norm > 1e-12:
+            ws.C[-self.na - 1] = row / norm
+            ws.lower[-self.na - 1] = bound / norm
+        else:
+            ws.C[-self.na - 1] = 0.0
+            ws.lower[-self.na - 1] = -INFINITY if bound <= 0.0 else INFINITY
+        ws.upper[-self.na - 1] = INFINITY
 
     def _write_force_references(self, ws: _Workspace, contacts: list[ContactConstraint], scale: float) -> None:
         """``-2 w_c s f*_c`` in the gradient of the contacts that have a force reference."""

@@ -41,7 +41,7 @@ def test_pseudo_inverse_identities_for_a_stacked_skinny_jacobian(seed):
     mass, _, blocks = random_problem(rng)
     jacobian = stack(blocks).jacobian
     j_pinv = pinv_skinny(jacobian)
-    inertia = task_space_inertia(jacobian, np.linalg.inv(mass))
+    inertia = task_space_inertia(jacobian, mass, np.linalg.inv(mass))
     scale = np.abs(inertia).max()
     assert np.allclose(j_pinv @ jacobian, np.eye(mass.shape[0]), atol=1e-9)                      # 5.9
     assert np.allclose(inertia, j_pinv.T @ mass @ j_pinv, atol=1e-9 * scale)                     # 5.10
@@ -52,7 +52,7 @@ def test_per_task_inertia_is_the_operational_space_inertia():
     rng = np.random.default_rng(1)
     mass, _, blocks = random_problem(rng)
     jacobian = blocks[0].jacobian  # fat (3 x 8): (J M^-1 J^T)^-1, which differs from J^+T M J^+ (errata E13)
-    inertia = task_space_inertia(jacobian, np.linalg.inv(mass))
+    inertia = task_space_inertia(jacobian, mass, np.linalg.inv(mass))
     assert np.allclose(inertia, np.linalg.inv(jacobian @ np.linalg.solve(mass, jacobian.T)))
     j_pinv = np.linalg.pinv(jacobian)
     assert not np.allclose(inertia, j_pinv.T @ mass @ j_pinv, atol=1e-3)
@@ -66,7 +66,7 @@ def test_energy_balance_identity_5_25(seed, scale, equal_gains):
     nv = 8
     mass, v, blocks = random_problem(rng, nv, gains=[30.0, 30.0, 30.0] if equal_gains else None)
     block = stack(blocks)
-    inertia = task_space_inertia(block.jacobian, np.linalg.inv(mass))
+    inertia = task_space_inertia(block.jacobian, mass, np.linalg.inv(mass))
     lam_dot = rng.normal(size=inertia.shape)
     rate = (lam_dot + lam_dot.T) * block.kp  # d(Lambda K_P)/dt for a symmetric Lambda_dot
     bias = rng.normal(size=nv)
@@ -91,8 +91,8 @@ def test_storage_is_nonnegative_with_equal_gains_per_task():
         mass, _, blocks = random_problem(rng)
         inverse = np.linalg.inv(mass)
         for block in blocks:  # K_P = k I within each block
-            assert task_power(block, task_space_inertia(block.jacobian, inverse), np.zeros((len(block.error),) * 2)
-                              ).storage >= 0.0
+            inertia = task_space_inertia(block.jacobian, mass, inverse)
+            assert task_power(block, inertia, np.zeros_like(inertia)).storage >= 0.0
 
 
 def test_unequal_gains_can_make_the_stacked_storage_form_indefinite():
@@ -102,7 +102,7 @@ def test_unequal_gains_can_make_the_stacked_storage_form_indefinite():
     for _ in range(200):
         mass, _, blocks = random_problem(rng, gains=[1.0, 1000.0, 1.0])
         block = stack(blocks)
-        p = stiffness(block, task_space_inertia(block.jacobian, np.linalg.inv(mass)))
+        p = stiffness(block, task_space_inertia(block.jacobian, mass, np.linalg.inv(mass)))
         if np.linalg.eigvalsh(0.5 * (p + p.T)).min() < -1e-9:
             found = True
             break
@@ -124,7 +124,7 @@ def test_storage_rate_matches_the_finite_difference_of_storage():
         mass = mass0 * (1.0 + 0.2 * np.sin(2 * time))
         error, error_rate = e0 * np.cos(time) + e1 * time, -e0 * np.sin(time) + e1
         block = TaskBlock(error, error_rate, np.zeros(m), np.zeros(m), np.zeros(m), kp, np.zeros(m), jacobian)
-        return block, task_space_inertia(jacobian, np.linalg.inv(mass))
+        return block, task_space_inertia(jacobian, mass, np.linalg.inv(mass))
 
     errors = []
     for dt in (1e-3, 5e-4):
@@ -147,7 +147,7 @@ def test_fixed_base_reduction_keeps_the_balance():
     nv = 6
     mass, v, blocks = random_problem(rng, nv, rows=(3, 3, 6), gains=[50.0, 50.0, 50.0])
     block = stack(blocks)
-    inertia = task_space_inertia(block.jacobian, np.linalg.inv(mass))
+    inertia = task_space_inertia(block.jacobian, mass, np.linalg.inv(mass))
     bias = rng.normal(size=nv)
     a = pinv_skinny(block.jacobian) @ (block.reference_acceleration - block.drift - block.kp * block.error
                                        - block.kd * block.error_velocity)
@@ -155,3 +155,19 @@ def test_fixed_base_reduction_keeps_the_balance():
     power = task_power(block, inertia, np.zeros_like(inertia))
     assert -v @ tau == pytest.approx(power.storage_rate + power.controllable_power - uncontrollable_power(v, bias, 0.0),
                                      rel=1e-9)
+
+
+def test_rank_deficient_jacobians_fall_back_to_the_pseudo_inverse():
+    rng = np.random.default_rng(7)
+    mass, _, blocks = random_problem(rng)
+    inverse = np.linalg.inv(mass)
+    fat = np.vstack([blocks[0].jacobian, blocks[0].jacobian[:1]])  # a repeated row: J M^-1 J^T singular
+    inertia = task_space_inertia(fat, mass, inverse)
+    product = fat @ inverse @ fat.T
+    assert np.allclose(product @ inertia @ product, product, atol=1e-9)  # a generalized inverse
+    assert np.allclose(inertia, np.linalg.pinv(product, rcond=1e-9, hermitian=True), atol=1e-8)
+    skinny = np.vstack([blocks[1].jacobian, blocks[1].jacobian])[:, :7]  # 12 x 7 of rank 6
+    skinny = np.hstack([skinny, skinny[:, :1]])  # rank-deficient columns
+    inertia = task_space_inertia(skinny, mass, inverse)
+    product = skinny @ inverse @ skinny.T
+    assert np.allclose(product @ inertia @ product, product, atol=1e-8)

@@ -1,0 +1,139 @@
+"""PointContact: a frame's point pressing on a surface (a tool tip on a block), with a force reference."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.contacts.constraint import ContactConstraint
+from dgraph.entities.robot.robot_state import WORLD, FrameReader
+from dgraph.entities.tasks.gains import Gains
+
+
+def tangent_basis(normal: np.ndarray) -> np.ndarray:
+    """Rows ``t1, t2, n``: an orthonormal basis whose last row is the unit ``normal``."""
+    n = normal / np.linalg.norm(normal)
+    helper = np.eye(3)[int(np.argmin(np.abs(n)))]
+    t1 = np.cross(n, helper)
+    t1 /= np.linalg.norm(t1)
+    return np.vstack([t1, np.cross(n, t1), n])
+
+
+def point_friction(normal: np.ndarray, mu: float) -> np.ndarray:
+    """Rows ``C`` (5 x 3): four faces ``+-t_i . f - mu' n . f <= 0`` of the pyramid inscribed in
+    Coulomb's cone (``mu' = mu / sqrt 2``, thesis Eq. 2.11), then the normal force ``n . f``."""
+    t1, t2, n = tangent_basis(normal)
+    inner = mu / np.sqrt(2.0)
+    return np.vstack([t1 - inner * n, -t1 - inner * n, t2 - inner * n, -t2 - inner * n, n])
+
+
+@dg.register
+class PointContact(FrameReader, dg.Entity):
+    """A unilateral point contact of a robot frame on a surface of world ``normal`` (TSID's
+    ContactPoint), the contact of a Cartesian force-contact task (thesis Eq. 4.12-4.13).
+
+    Motion (hard rows of the QP): the point does not accelerate, with a PD correction towards the
+    anchor ``p_a`` (where the point was when the contact became active):
+    ``J a + J_dot v = -Kp (p - p_a) - Kd p_dot``, with ``J`` the 3 x nv linear Jacobian of the
+    frame origin (world axes) and ``J_dot v`` its classical acceleration at ``a = 0``.
+
+    Force: ``f`` (3 variables, world axes) is the force the surface exerts on the robot at the
+    point; ``n . f`` within ``[min_normal_force, max_normal_force]`` and the inscribed friction
+    pyramid (:func:`point_friction`). Cost ``force_weight ||f - f*||^2`` with ``f*`` the input
+    ``force_reference`` (plug a :class:`~dgraph.entities.tasks.ForceTask`'s ``force``; its
+    default 0 makes it a regularisation).
+
+    Parameters: ``frame`` (the point: a frame of the plugged model, e.g. a tool tip added with
+    RobotModel's ``tool_frames``), ``normal`` (3, world, pointing from the surface into the
+    robot's side: the direction of the force on the robot), ``mu``, ``min_normal_force``,
+    ``max_normal_force`` (N), ``force_weight``.
+    Inputs: ``robot``, ``kp``, ``kd`` (scalar or 3), ``active`` (commands ``activate`` /
+    ``deactivate``), ``force_reference`` (3, N, world).
+    State: ``anchor`` (3, the anchored point; None while inactive).
+    Outputs: ``contact`` (:class:`ContactConstraint`), ``error`` (``p - p_a``), ``position`` (``p``).
+    """
+
+    has_state = True
+
+    frame = dg.Param(kind="str", doc="the contact point (a frame of the model)")
+    normal = dg.Param([0.0, 0.0, 1.0], kind="vector", doc="surface normal, world (direction of the force on the robot)")
+    mu = dg.Param(0.5, kind="float", minimum=1e-3, doc="friction coefficient")
+    min_normal_force = dg.Param(0.0, kind="float", minimum=0.0, doc="minimum normal force (N)")
+    max_normal_force = dg.Param(200.0, kind="float", minimum=0.0, doc="maximum normal force (N)")
+    force_weight = dg.Param(1e-5, kind="float", minimum=0.0, doc="weight of ||f - f*||^2 in the cost")
+
+    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+    kp = dg.Input(default=0.0, doc="anchor stiffness (scalar or 3)")
+    kd = dg.Input(default=0.0, doc="anchor damping (scalar or 3)")
+    active = dg.Input(shape=(), dtype="bool", default=True, doc="whether the contact is in the QP")
+    force_reference = dg.Input(shape=(3,), default=np.zeros(3), doc="f*: desired force on the robot (N, world)")
+    anchor = dg.State(dtype="object", doc="anchored point (world, 3), None while inactive")
+
+    def configure(self) -> None:
+        """Friction rows and bounds."""
+        normal = np.asarray(self.normal, dtype=float)
+        if normal.shape != (3,) or not np.linalg.norm(normal) > 1e-9:
+            raise dg.ParamError(f"{self.name}: normal must be a non-zero 3-vector", entity=self.name)
+        if self.max_normal_force < self.min_normal_force:
+            raise dg.ParamError(f"{self.name}: max_normal_force < min_normal_force", entity=self.name)
+        self._friction = point_friction(normal, self.mu)
+        self._lower = np.array([-np.inf] * 4 + [self.min_normal_force])
+        self._upper = np.array([0.0] * 4 + [self.max_normal_force])
+        self._generator = np.eye(3)
+        self._gains = Gains(self)
+
+    def reset(self) -> None:
+        """No anchor until the first active tick."""
+        self.anchor.set(None, 0)
+        self._changed = False
+
+    @dg.command
+    def activate(self) -> None:
+        """Add the contact (anchored where the point is at the next tick)."""
+        self.active.set(True)
+
+    @dg.command
+    def deactivate(self) -> None:
+        """Remove the contact from the QP."""
+        self.active.set(False)
+
+    def _anchor(self, t: int, position: np.ndarray) -> np.ndarray:
+        anchor = self.anchor(t)
+        return position if anchor is None else anchor
+
+    @dg.output(shape=(3,), depends=("robot",))
+    def position(self, t: int) -> np.ndarray:
+        """The point ``p`` (world)."""
+        state = self.robot(t)
+        return state.frame_placement(self.frame_index(state)).translation
+
+    @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "force_reference", "anchor", "position"))
+    def contact(self, t: int) -> ContactConstraint:
+        """Motion rows, friction rows and the force reference at ``t``."""
+        state = self.robot(t)
+        frame = self.frame_index(state)
+        position = self.position(t)
+        error = position - self._anchor(t, position)
+        kp, kd = self._gains.vector("kp", 3, t), self._gains.vector("kd", 3, t)
+        velocity = state.frame_velocity(frame, WORLD)[:3]
+        rhs = -kp * error - kd * velocity - state.frame_drift(frame, WORLD)[:3]
+        return ContactConstraint(self.name, bool(self.active(t)), state.frame_jacobian(frame, WORLD)[:3], rhs,
+                                 self._generator, self._friction, self._lower, self._upper, self.force_weight,
+                                 np.eye(3), error, self.force_reference(t))
+
+    @dg.output(shape=(3,), depends=("contact",))
+    def error(self, t: int) -> np.ndarray:
+        """``p - p_a`` (world)."""
+        return self.contact(t).error
+
+    def prepare_state(self, t: int) -> None:
+        """Anchor at the first active tick, forget it when inactive (staged only on a change)."""
+        anchored = self.anchor(t) is not None
+        self._changed = anchored != bool(self.active(t))
+        if self._changed:
+            self.anchor.stage(None if anchored else self.position(t).copy())
+
+    def commit_state(self, t_next: int) -> None:
+        """Publish the anchor if it changed."""
+        if self._changed:
+            self.anchor.commit(t_next)
