@@ -145,3 +145,18 @@ def test_a_state_kept_past_its_pass_raises_instead_of_answering_for_another(mode
     data = model.createData()
     pin.framesForwardKinematics(model, data, q)
     assert np.allclose(placement.homogeneous, data.oMf[model.getFrameId("left_sole_link")].homogeneous)
+
+
+def test_inverse_mass_matrix_inverts_the_mass_matrix_and_leaves_the_drifts():
+    g = dg.Graph()
+    robot = g.add(RobotModel("robot"))
+    rng = np.random.default_rng(11)
+    model = robot.pin_model
+    q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
+    robot.q.set(q)
+    robot.v.set(rng.normal(size=model.nv))
+    state = robot.state(0)
+    drift_before = state.com_drift
+    inverse = state.inverse_mass_matrix
+    assert np.abs(inverse @ state.mass_matrix - np.eye(model.nv)).max() < 1e-9
+    assert np.array_equal(state.com_drift, drift_before)

@@ -179,7 +179,7 @@ class EnergyTank(dg.Entity):
     def _compute_stage(self, t: int) -> TankStage:
         state: RobotState = self.robot(t)
         v = state.v
-        inverse_mass = np.linalg.inv(state.mass_matrix)
+        inverse_mass = state.inverse_mass_matrix
         previous = self.history(t)
         storage = storage_rate = controllable = 0.0
         stiffnesses = {}
