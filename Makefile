@@ -23,13 +23,15 @@ test: $(STAMP) lint
 lint: $(STAMP)
 	$(BIN)/ruff check .
 
-## bench: signal overhead against Drake, TALOS tick against TSID 1.10, ID formulations (installs the peers)
+## bench: signal overhead against Drake, TALOS tick against TSID 1.10, ID formulations, energy tank (installs the peers)
 bench: $(STAMP)
 	bash bench/setup_peer.sh
 	$(BIN)/python bench/signal_overhead.py --peer .venv-bench/bin/python
 	bash bench/setup_tsid.sh
 	$(BIN)/python bench/talos_tick.py --json out/talos_tick.json
 	$(BIN)/python bench/id_formulations.py
+	$(BIN)/pip install --quiet -e ".[plots]"
+	$(BIN)/python bench/energy_tank.py --plots docs
 
 clean:
 	rm -rf $(VENV) .venv-bench .venv-tsid out .pytest_cache .hypothesis
