@@ -252,9 +252,11 @@ def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = 
         raise GraphFileError(f"could not build the graph: {type(exc).__name__}: {exc}", file=file) from exc
 
 
-def _extend(data: dict[str, Any], doc: _Document, overrides: dict[str, Any], depth: int = 1) -> Graph:
+def _extend(data: dict[str, Any], doc: _Document, overrides: dict[str, Any], depth: int = 1,
+            origins: tuple[tuple[_Document, dict[str, Any]], ...] = ()) -> Graph:
     """Build the file that ``data`` extends, with its name, duration and overrides (the command
-    line's ``overrides`` win)."""
+    line's ``overrides`` win; ``origins``: the overrides of the files extending this one, checked
+    against the final base's entities)."""
     if depth > MAX_EXTENDS:
         raise doc.error(f"more than {MAX_EXTENDS} files extend one another (a cycle?)", ("extends",))
     base_file = Path(doc.file).parent / data["extends"]
@@ -266,13 +268,15 @@ def _extend(data: dict[str, Any], doc: _Document, overrides: dict[str, Any], dep
         if key in data:
             base[key] = data[key]
     own = data.get("overrides", {})
+    origins = (*origins, (doc, own))
     if "extends" not in base:
         entities = declared_entities(base)
-        for key in own:
-            if key.partition(".")[0] not in entities:
-                raise doc.error(f"no entity {key.partition('.')[0]!r} in {base_file}", ("overrides", key))
+        for origin, keys in origins:
+            for key in keys:
+                if key.partition(".")[0] not in entities:
+                    raise origin.error(f"no entity {key.partition('.')[0]!r} in {base_file}", ("overrides", key))
         return _build(base, base_doc, {**own, **overrides})
-    return _extend(base, base_doc, {**own, **overrides}, depth + 1)
+    return _extend(base, base_doc, {**own, **overrides}, depth + 1, origins)
 
 
 def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> Graph:

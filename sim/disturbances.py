@@ -22,6 +22,7 @@ class Removals:
     def __init__(self, model: mujoco.MjModel, bodies: Sequence[str], times: Sequence[float]):
         if len(bodies) != len(times):
             raise ValueError(f"{len(bodies)} bodies to remove but {len(times)} removal times")
+        self.model = model
         self.schedule: list[tuple[float, int]] = []
         for body, time in zip(bodies, times, strict=True):
             body_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body)
@@ -30,7 +31,13 @@ class Removals:
             self.schedule.append((float(time), int(model.body_mocapid[body_id])))
 
     def apply(self, data: mujoco.MjData, time: float) -> None:
-        """Move every body whose removal time has come (idempotent)."""
+        """Move every body whose removal time has come (idempotent). When one moves, the position
+        stage is redone (``mj_step1``: its contacts were found before it moved), so the step that
+        follows no longer feels it."""
+        moved = False
         for removal_time, mocap in self.schedule:
-            if time >= removal_time:
+            if time >= removal_time and not np.array_equal(data.mocap_pos[mocap], AWAY):
                 data.mocap_pos[mocap] = AWAY
+                moved = True
+        if moved:
+            mujoco.mj_step1(self.model, data)

@@ -208,3 +208,103 @@ def test_environment_is_untouched_by_loading():
     before = dict(os.environ)
     dg.load(PD)
     assert dict(os.environ) == before
+
+
+# -- a file extending another ------------------------------------------------------------------
+
+BASE = GOOD.replace("dt: 0.01\n", "dt: 0.01\nduration: 2.0\n")
+
+
+def write(directory: Path, name: str, text: str) -> Path:
+    directory.mkdir(parents=True, exist_ok=True)
+    (directory / name).write_text(text)
+    return directory / name
+
+
+def test_a_derived_file_builds_the_base_graph_with_its_name_duration_and_overrides(tmp_path):
+    write(tmp_path / "graphs", "base.yaml", BASE)
+    derived = write(tmp_path / "graphs", "derived.yaml",
+                    "extends: base.yaml\nname: variant\nduration: 5.0\n"
+                    "overrides:\n  k.gain: 3.0\n  dev.q0: [1.0, 2.0]\n")
+    base = dg.load(tmp_path / "graphs" / "base.yaml")
+    g = dg.load(derived)  # the base is found next to the derived file, not in the working directory
+    assert (g.name, g.duration, g.dt) == ("variant", 5.0, 0.01)
+    assert (base.name, base.duration, base["k.gain"].value) == ("small", 2.0, 2.0)
+    assert list(g.entities) == list(base.entities) and g.plugs() == base.plugs()
+    assert g["k.gain"].value == 3.0 and np.array_equal(g["dev.q"].value, [1.0, 2.0])
+    assert g["dev"].params["q0"] is not None and base["dev"].params["q0"] is None
+    # without name and duration, the base's are kept
+    plain = write(tmp_path / "graphs", "plain.yaml", "extends: base.yaml\n")
+    g = dg.load(plain)
+    assert (g.name, g.duration, g["k.gain"].value) == ("small", 2.0, 2.0)
+
+
+def test_command_line_overrides_win_and_the_nearest_file_wins_in_a_chain(tmp_path):
+    write(tmp_path, "base.yaml", BASE)
+    middle = write(tmp_path, "middle.yaml",
+                   "extends: base.yaml\nname: middle\noverrides: {k.gain: 3.0, dev.q0: [1, 1]}\n")
+    top = write(tmp_path, "top.yaml", "extends: middle.yaml\noverrides: {k.gain: 4.0}\n")
+    assert dg.load(middle, overrides={"k.gain": 7.0})["k.gain"].value == 7.0
+    g = dg.load(top)
+    assert g.name == "middle" and g["k.gain"].value == 4.0 and np.array_equal(g["dev.q"].value, [1.0, 1.0])
+    g = dg.load(top, overrides={"k.gain": 9.0, "dev.q0": [0.0, 5.0]})
+    assert g["k.gain"].value == 9.0 and np.array_equal(g["dev.q"].value, [0.0, 5.0])
+
+
+EXTENSION_ERRORS = [
+    # (derived text, line, message fragment)
+    ("extends: base.yaml\nname: x\noverrides:\n  k.gain: 3.0\n  nope.gain: 1.0\n", 5, "no entity 'nope' in"),
+    ("name: x\nextends: missing.yaml\n", 2, "cannot extend 'missing.yaml'"),
+    ("extends: base.yaml\nentities:\n  k: {type: Gain}\n", 2, "unknown key 'entities' (allowed: extends, name"),
+    ("extends: base.yaml\ndt: 0.1\n", 2, "unknown key 'dt'"),
+    ("extends: base.yaml\noverrides:\n  kgain: 1.0\n", 3, "'kgain' must read 'entity.signal'"),
+    ("extends: unparsable.yaml\n", 1, "cannot extend 'unparsable.yaml'"),
+]
+
+
+@pytest.mark.parametrize(("text", "line", "fragment"), EXTENSION_ERRORS)
+def test_errors_of_a_derived_file_point_at_its_lines(text, line, fragment, tmp_path):
+    write(tmp_path, "base.yaml", BASE)
+    write(tmp_path, "unparsable.yaml", "entities: {a: {type: Gain}\n")
+    derived = write(tmp_path, "derived.yaml", text)
+    with pytest.raises(dg.GraphFileError) as info:
+        dg.load(derived)
+    assert info.value.file == str(derived)
+    assert info.value.line == line, str(info.value)
+    assert fragment in str(info.value)
+
+
+def test_an_unknown_entity_two_files_up_is_blamed_on_that_file(tmp_path):
+    write(tmp_path, "base.yaml", BASE)
+    write(tmp_path, "middle.yaml", "extends: base.yaml\n")
+    top = write(tmp_path, "top.yaml", "extends: middle.yaml\nname: top\noverrides:\n  nope.gain: 1.0\n")
+    with pytest.raises(dg.GraphFileError, match="no entity 'nope'") as info:
+        dg.load(top)
+    assert (info.value.file, info.value.line) == (str(top), 4)
+
+
+def test_an_error_in_the_base_file_names_the_base_and_its_line(tmp_path):
+    write(tmp_path, "bad_base.yaml", GOOD.replace("type: Gain", "type: Gian"))
+    derived = write(tmp_path, "derived.yaml", "extends: bad_base.yaml\n")
+    with pytest.raises(dg.GraphFileError, match=r"bad_base\.yaml:6.*unknown entity type 'Gian'"):
+        dg.load(derived)
+
+
+def test_a_cycle_of_files_extending_one_another_is_refused(tmp_path):
+    a = write(tmp_path, "a.yaml", "extends: b.yaml\n")
+    write(tmp_path, "b.yaml", "extends: a.yaml\n")
+    myself = write(tmp_path, "self.yaml", "extends: self.yaml\n")
+    for path in (a, myself):
+        with pytest.raises(dg.GraphFileError, match="extend one another") as info:
+            dg.load(path)
+        assert info.value.line == 1
+
+
+def test_the_push_graph_without_tank_is_the_tank_graph_with_the_tank_disabled(monkeypatch):
+    monkeypatch.chdir(ROOT)  # the force profile's path is relative to the repository
+    tank = dg.load(ROOT / "graphs" / "talos_push_tank.yaml")
+    no_tank = dg.load(ROOT / "graphs" / "talos_push_no_tank.yaml")
+    assert (no_tank.name, tank.name) == ("talos_push_no_tank", "talos_push_tank")
+    assert no_tank.duration == tank.duration == 20.0
+    assert list(no_tank.entities) == list(tank.entities) and no_tank.plugs() == tank.plugs()
+    assert tank["tank"].params["enabled"] is True and no_tank["tank"].params["enabled"] is False

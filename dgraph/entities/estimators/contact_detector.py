@@ -53,7 +53,8 @@ class ContactDetector(dg.Entity):
         switching = (phase == APPROACHING and normal_force >= self.on_force) or \
                     (phase == IN_CONTACT and normal_force <= self.off_force)
         timer = float(self.timer(t)) + self.dt if switching else 0.0
-        if switching and timer >= (self.on_time if phase == APPROACHING else self.off_time):
+        # a millionth of a tick of slack: n ticks of dt may add up to just under n dt (10 x 0.01 s)
+        if switching and timer >= (self.on_time if phase == APPROACHING else self.off_time) - 1e-6 * self.dt:
             phase, timer = phase + 1, 0.0
         self.phase.stage(phase)
         self.in_contact.stage(phase == IN_CONTACT)
