@@ -293,7 +293,7 @@ def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> G
         raise doc.error(f"'record' creates an entity named {RECORDER_NAME!r}, which already exists", ("record",))
     param_overrides, constants = _split_overrides(doc, entities, overrides)
     for name, spec in entities.items():
-        params = {**(spec.get("params") or {}), **param_overrides.get(name, {})}
+        params = {**_resolve_paths(doc, spec), **param_overrides.get(name, {})}
         graph.add(_make_entity(doc, name, spec["type"], params, spec.get("_path")))
     for i, plug in enumerate(data.get("plugs", [])):
         source, target = PLUG_RE.match(plug).groups()
@@ -314,6 +314,22 @@ def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> G
         if problems:
             raise doc.error("; ".join(problems), entities[entity.name].get("_path", ("entities", entity.name)))
     return graph
+
+
+def _resolve_paths(doc: _Document, spec: dict[str, Any]) -> dict[str, Any]:
+    """The entity's parameters, with relative ``path`` parameters taken from the file's folder."""
+    params = dict(spec.get("params") or {})
+    folder = Path(doc.file).parent if doc.file != "<string>" else None
+    try:
+        decls = get_type(spec["type"])._param_decls
+    except DGraphError:
+        return params  # the unknown type is reported where the entity is made
+    for name, value in params.items():
+        decl = decls.get(name)
+        if folder is not None and decl is not None and decl.kind == "path" and isinstance(value, str) \
+                and not Path(value).is_absolute():
+            params[name] = str(folder / value)
+    return params
 
 
 def _override_error(message: str, key: str) -> GraphFileError:
@@ -389,6 +405,8 @@ def to_plain(value: Any, where: str) -> Any:
         return value
     if isinstance(value, (list, tuple)):
         return [to_plain(v, where) for v in value]
+    if isinstance(value, dict) and all(isinstance(k, str) for k in value):
+        return {k: to_plain(v, f"{where}.{k}") for k, v in value.items()}
     raise GraphError(f"{where}: a {type(value).__name__} cannot be written to a graph file")
 
 

@@ -73,7 +73,7 @@ def _to_int_list(v: Any) -> list[int]:
 
 
 KINDS: dict[str, Callable[[Any], Any]] = {
-    "float": _to_float, "int": _to_int, "bool": _to_bool, "str": _to_str,
+    "float": _to_float, "int": _to_int, "bool": _to_bool, "str": _to_str, "path": _to_str,
     "vector": _to_vector, "str_list": _to_str_list, "int_list": _to_int_list,
     "object": lambda v: v,
 }
@@ -84,7 +84,8 @@ class Param:
 
     Args:
         default: value when not given (omit for a required parameter).
-        kind: ``float``, ``int``, ``bool``, ``str``, ``vector`` (numbers -> ndarray),
+        kind: ``float``, ``int``, ``bool``, ``str``, ``path`` (an input file: a relative path
+            in a graph file is taken from the file's folder), ``vector`` (numbers -> ndarray),
             ``str_list``, ``int_list`` or ``object`` (anything; not saveable to a graph file
             unless it is plain data).
         doc: one line shown by ``dgraph entities``.

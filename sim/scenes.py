@@ -99,6 +99,8 @@ class Scene:
         the scene but not the robot, with a site ``<name>_tip`` at ``end``. Massless, so the robot's
         Pinocchio model stays exact."""
         robot_body = self.spec.body(body)
+        if robot_body is None:
+            raise ValueError(f"the tool {name!r} needs the robot body {body!r}, which the model does not have")
         robot_body.add_site(name=f"{name}_tip", pos=list(end), size=[0.005, 0.005, 0.005], group=4)
         return robot_body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER, fromto=[*start, *end],
                                    size=[radius, 0.0, 0.0], mass=0.0, density=0.0, rgba=[0.2, 0.2, 0.25, 1.0],

@@ -49,8 +49,11 @@ def test_named_scenes_compile_with_light_and_camera():
     for name in SCENES:
         spec = mujoco.MjSpec()
         spec.worldbody.add_body(name="base").add_geom(size=[0.1, 0, 0])
+        spec.worldbody.add_body(name="gripper_left_base_link")  # the push scene's tool hangs on TALOS's gripper
         add_scene(spec, name, tracked_body="base")
         m = spec.compile()
         assert m.nlight == 1 and m.ncam == 2 and m.geom("floor").id >= 0  # side and front cameras
     with pytest.raises(ValueError, match="unknown scene"):
         add_scene(mujoco.MjSpec(), "moon")
+    with pytest.raises(ValueError, match="needs the robot body 'gripper_left_base_link'"):
+        add_scene(mujoco.MjSpec(), "push")

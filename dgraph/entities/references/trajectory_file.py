@@ -193,7 +193,7 @@ class TrajectoryFile(dg.Entity):
     Outputs: ``position``, ``velocity``, ``acceleration`` (n,), depending on time.
     """
 
-    path = dg.Param(kind="str", doc="trajectory file (.csv or .npz)")
+    path = dg.Param(kind="path", doc="trajectory file (.csv or .npz; in a graph file, relative to its folder)")
     layout = dg.Param("p", kind="str", choices=tuple(LAYOUTS), doc="CSV columns after time: p, pv or pva blocks")
     interpolation = dg.Param("cubic", kind="str", choices=("linear", "cubic"), doc="interpolation in time")
     start = dg.Param(0.0, kind="float", minimum=-1e9, maximum=1e9, doc="graph time (s) at which file time 0 is played")
