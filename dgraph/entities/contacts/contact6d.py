@@ -6,6 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 import dgraph as dg
+from dgraph.entities.contacts.anchoring import AnchoredContact
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.robot.robot_state import LOCAL, FrameReader
 from dgraph.entities.tasks.gains import Gains
@@ -43,7 +44,7 @@ def friction_pyramid(n_corners: int, mu: float) -> np.ndarray:
 
 
 @dg.register
-class Contact6d(FrameReader, dg.Entity):
+class Contact6d(AnchoredContact, FrameReader, dg.Entity):
     """A rigid planar contact of a robot frame (thesis §2.4, Eq. 4.10–4.11; TSID's Contact6d).
 
     Motion: the contact frame must not accelerate, with a PD correction of drift from the
@@ -67,8 +68,6 @@ class Contact6d(FrameReader, dg.Entity):
     Outputs: ``contact`` (:class:`ContactConstraint`, with ``e``), ``error`` (``e``, 6).
     """
 
-    has_state = True
-
     frame = dg.Param(kind="str", doc="contact frame (z = sole normal)")
     front = dg.Param(0.10, kind="float", minimum=0.0, doc="sole length in front of the frame origin (m)")
     back = dg.Param(0.11, kind="float", minimum=0.0, doc="sole length behind the frame origin (m)")
@@ -81,8 +80,6 @@ class Contact6d(FrameReader, dg.Entity):
     robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
     kp = dg.Input(default=0.0, doc="drift-correction stiffness (scalar or 6)")
     kd = dg.Input(default=0.0, doc="drift-correction damping (scalar or 6)")
-    active = dg.Input(shape=(), dtype="bool", default=True, doc="whether the contact is in the QP")
-    anchor = dg.State(dtype="object", doc="anchored placement (pinocchio.SE3) or None")
 
     def configure(self) -> None:
         """Precompute the force generator and the friction rows."""
@@ -98,26 +95,8 @@ class Contact6d(FrameReader, dg.Entity):
         self._lower = np.concatenate([np.full(len(pyramid), -np.inf), [self.min_normal_force]])
         self._upper = np.concatenate([np.zeros(len(pyramid)), [self.max_normal_force]])
 
-    def reset(self) -> None:
-        """No anchor until the first tick in contact."""
-        self.anchor.set(None, 0)
-        self._changed = False
-
-    @dg.command
-    def activate(self) -> None:
-        """Add the contact (anchored where the frame is at the next tick)."""
-        self.active.set(True)
-
-    @dg.command
-    def deactivate(self) -> None:
-        """Remove the contact from the QP."""
-        self.active.set(False)
-
-    def _anchor(self, t: int) -> pin.SE3:
-        """The anchored placement, or the current one before the first anchoring tick."""
-        anchor = self.anchor(t)
-        if anchor is not None:
-            return anchor
+    def here(self, t: int) -> pin.SE3:
+        """The frame's placement at ``t`` (a copy)."""
         state = self.robot(t)
         return state.frame_placement(self.frame_index(state))
 
@@ -126,7 +105,7 @@ class Contact6d(FrameReader, dg.Entity):
         """Motion rows, force generator and friction rows at ``t``."""
         state = self.robot(t)
         frame = self.frame_index(state)
-        placement, anchor = state.frame_placement(frame), self._anchor(t)
+        placement, anchor = state.frame_placement(frame), self.anchor_or_here(t)
         rotation = placement.rotation
         error = np.concatenate([rotation.T @ (placement.translation - anchor.translation),
                                 pin.log3(anchor.rotation.T @ rotation)])
@@ -140,16 +119,3 @@ class Contact6d(FrameReader, dg.Entity):
     def error(self, t: int) -> np.ndarray:
         """``e = [R^T (p - p_a), log3(R_a^T R)]`` (local frame)."""
         return self.contact(t).error
-
-    def prepare_state(self, t: int) -> None:
-        """Anchor at the first active tick; forget the anchor when inactive. The anchor is
-        staged only when it changes, so a steady contact does not disturb its readers."""
-        anchored = self.anchor(t) is not None
-        self._changed = anchored != bool(self.active(t))
-        if self._changed:
-            self.anchor.stage(None if anchored else self._anchor(t))  # frame_placement is a copy
-
-    def commit_state(self, t_next: int) -> None:
-        """Publish the anchor if it changed."""
-        if self._changed:
-            self.anchor.commit(t_next)

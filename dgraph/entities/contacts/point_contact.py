@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
+from dgraph.entities.contacts.anchoring import AnchoredContact
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.robot.robot_state import WORLD, FrameReader
 from dgraph.entities.tasks.gains import Gains
@@ -28,7 +29,7 @@ def point_friction(normal: np.ndarray, mu: float) -> np.ndarray:
 
 
 @dg.register
-class PointContact(FrameReader, dg.Entity):
+class PointContact(AnchoredContact, FrameReader, dg.Entity):
     """A unilateral point contact of a robot frame on a surface of world ``normal`` (TSID's
     ContactPoint), the contact of a Cartesian force-contact task (thesis Eq. 4.12-4.13).
 
@@ -53,8 +54,6 @@ class PointContact(FrameReader, dg.Entity):
     Outputs: ``contact`` (:class:`ContactConstraint`), ``error`` (``p - p_a``), ``position`` (``p``).
     """
 
-    has_state = True
-
     frame = dg.Param(kind="str", doc="the contact point (a frame of the model)")
     normal = dg.Param([0.0, 0.0, 1.0], kind="vector", doc="surface normal, world (direction of the force on the robot)")
     mu = dg.Param(0.5, kind="float", minimum=1e-3, doc="friction coefficient")
@@ -65,9 +64,7 @@ class PointContact(FrameReader, dg.Entity):
     robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
     kp = dg.Input(default=0.0, doc="anchor stiffness (scalar or 3)")
     kd = dg.Input(default=0.0, doc="anchor damping (scalar or 3)")
-    active = dg.Input(shape=(), dtype="bool", default=True, doc="whether the contact is in the QP")
     force_reference = dg.Input(shape=(3,), default=np.zeros(3), doc="f*: desired force on the robot (N, world)")
-    anchor = dg.State(dtype="object", doc="anchored point (world, 3), None while inactive")
 
     def configure(self) -> None:
         """Friction rows and bounds."""
@@ -82,24 +79,9 @@ class PointContact(FrameReader, dg.Entity):
         self._generator = np.eye(3)
         self._gains = Gains(self)
 
-    def reset(self) -> None:
-        """No anchor until the first active tick."""
-        self.anchor.set(None, 0)
-        self._changed = False
-
-    @dg.command
-    def activate(self) -> None:
-        """Add the contact (anchored where the point is at the next tick)."""
-        self.active.set(True)
-
-    @dg.command
-    def deactivate(self) -> None:
-        """Remove the contact from the QP."""
-        self.active.set(False)
-
-    def _anchor(self, t: int, position: np.ndarray) -> np.ndarray:
-        anchor = self.anchor(t)
-        return position if anchor is None else anchor
+    def here(self, t: int) -> np.ndarray:
+        """The point at ``t`` (a copy)."""
+        return self.position(t).copy()
 
     @dg.output(shape=(3,), depends=("robot",))
     def position(self, t: int) -> np.ndarray:
@@ -112,8 +94,7 @@ class PointContact(FrameReader, dg.Entity):
         """Motion rows, friction rows and the force reference at ``t``."""
         state = self.robot(t)
         frame = self.frame_index(state)
-        position = self.position(t)
-        error = position - self._anchor(t, position)
+        error = self.position(t) - self.anchor_or_here(t)
         kp, kd = self._gains.vector("kp", 3, t), self._gains.vector("kd", 3, t)
         velocity = state.frame_velocity(frame, WORLD)[:3]
         rhs = -kp * error - kd * velocity - state.frame_drift(frame, WORLD)[:3]
@@ -125,15 +106,3 @@ class PointContact(FrameReader, dg.Entity):
     def error(self, t: int) -> np.ndarray:
         """``p - p_a`` (world)."""
         return self.contact(t).error
-
-    def prepare_state(self, t: int) -> None:
-        """Anchor at the first active tick, forget it when inactive (staged only on a change)."""
-        anchored = self.anchor(t) is not None
-        self._changed = anchored != bool(self.active(t))
-        if self._changed:
-            self.anchor.stage(None if anchored else self.position(t).copy())
-
-    def commit_state(self, t_next: int) -> None:
-        """Publish the anchor if it changed."""
-        if self._changed:
-            self.anchor.commit(t_next)
