@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
+from dgraph.entities.discrete.configuration_integrator import integration_step
 from dgraph.params import MAX_SIZE
 
 
@@ -69,9 +70,9 @@ class KinematicDevice(dg.Device):
 
     def prepare_state(self, t: int) -> None:
         """Pull ``control(t)`` and integrate one tick."""
-        u = self.control(t)
-        v_next = u if self.control_mode == "velocity" else self.v(t) + self.dt * u
-        self.q.stage(self._integrate(self.q(t), self.dt * v_next))
+        q_next, v_next = integration_step(self._integrate, self.q(t), self.v(t), self.control(t), self.dt,
+                                          self.control_mode)
+        self.q.stage(q_next)
         self.v.stage(v_next)
 
     def commit_state(self, t_next: int) -> None:
