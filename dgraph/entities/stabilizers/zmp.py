@@ -1,0 +1,120 @@
+"""The zero-moment point measured by force/torque sensors, as functions and as an entity."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.robot.robot_state import RobotState, frame_problems
+
+GRAVITY = 9.81
+
+
+def world_wrench(position: np.ndarray, rotation: np.ndarray, wrench: np.ndarray) -> np.ndarray:
+    """A sensor-frame ``[force, torque about the sensor origin]`` as ``[force, torque about the
+    world origin]``, world axes: ``f_W = R f``, ``τ_O = p × f_W + R τ``."""
+    force = rotation @ wrench[:3]
+    return np.concatenate([force, np.cross(position, force) + rotation @ wrench[3:]])
+
+
+def point_force(point: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """``[f, p × f]``: a force applied at ``point``, as a wrench about the world origin."""
+    return np.concatenate([force, np.cross(point, force)])
+
+
+def zero_moment_point(wrench: np.ndarray, height: float = 0.0) -> np.ndarray:
+    """The point ``p`` of the plane ``z = height`` about which the total contact wrench (world
+    axes, torque about the origin) has no horizontal moment (thesis §2.2.1):
+    ``p_x = (h f_x − τ_y) / f_z``, ``p_y = (h f_y + τ_x) / f_z``."""
+    f, tau = wrench[:3], wrench[3:]
+    return np.array([(height * f[0] - tau[1]) / f[2], (height * f[1] + tau[0]) / f[2], height])
+
+
+@dg.register
+class ZmpEstimator(dg.Entity):
+    """Measured ZMP from the ankle force/torque sensors (thesis §2.2.1; used by Eq. 2.30–2.31).
+
+    Each sensor gives the wrench its foot exerts on its leg, in the sensor frame (MuJoCo's
+    ankle sensors, ``MujocoDevice.ft_*_ankle``). With ``compensate_feet`` the wrench of the
+    ground on the foot is that wrench plus the foot's weight at the foot's centre of mass
+    (``w_ground = w_sensor + [m g ẑ, c × m g ẑ]``; static: the foot's acceleration is
+    neglected). The wrenches are summed about the world origin (``world_wrench``) and the ZMP is
+    where their horizontal moment vanishes on the ground plane ``z = height``
+    (``zero_moment_point``). Below ``min_normal_force`` of total vertical force (no contact)
+    the ZMP is undefined and the output is the mean of the sensor frames' projections.
+
+    Parameters: ``sensors`` (names of the wrench inputs), ``frames`` (their Pinocchio frames,
+    same order; TALOS: ``leg_left_6_joint``, ``leg_right_6_joint``), ``compensate_feet``,
+    ``height`` (ground plane, m), ``min_normal_force`` (N).
+    Inputs: ``robot`` (a RobotModel's state at the measured configuration), one wrench (6) per
+    sensor. Outputs: ``wrench`` (total ground wrench, world axes, torque about the origin),
+    ``zmp`` (3, world), ``normal_force`` (N).
+    """
+
+    sensors = dg.Param(["ft_left_ankle", "ft_right_ankle"], kind="str_list", doc="wrench input names")
+    frames = dg.Param(["leg_left_6_joint", "leg_right_6_joint"], kind="str_list", doc="sensor frames")
+    compensate_feet = dg.Param(True, kind="bool", doc="add the weight of the body below each sensor")
+    height = dg.Param(0.0, kind="float", doc="height of the ground plane (m)")
+    min_normal_force = dg.Param(10.0, kind="float", minimum=0.0, doc="below it the ZMP is undefined (N)")
+
+    robot = dg.Input(dtype="object", doc="a RobotModel's state (measured configuration)")
+
+    def configure(self) -> None:
+        """One wrench input per sensor."""
+        if len(self.sensors) != len(self.frames) or not self.sensors:
+            raise dg.ParamError(f"{self.name}: give one frame per sensor", entity=self.name)
+        for name in self.sensors:
+            if not name.isidentifier() or hasattr(type(self), name):
+                raise dg.ParamError(f"{self.name}: {name!r} cannot name an input", entity=self.name)
+            self.declare(name, dg.Input(shape=(6,), doc="sensor wrench: [force, torque], sensor frame"))
+        self._ids: tuple[object, list[int]] | None = None
+
+    def setup(self) -> None:
+        """Collect the wrench inputs."""
+        self._inputs = [getattr(self, name) for name in self.sensors]
+
+    def check(self) -> list[str]:
+        """The frames must exist in the plugged robot model."""
+        return frame_problems(self.robot, list(self.frames))
+
+    def _frame_ids(self, state: RobotState) -> list[int]:
+        if self._ids is None or self._ids[0] is not state.model:
+            try:
+                self._ids = (state.model, [state.frame_id(f) for f in self.frames])
+            except KeyError as exc:
+                raise dg.ParamError(f"{self.name}: the robot model has no frame {exc}", entity=self.name) from None
+        return self._ids[1]
+
+    def _foot_weight(self, state: RobotState, frame: int) -> np.ndarray:
+        """``[m g ẑ, c × m g ẑ]`` of the body carried by the sensor's joint."""
+        joint = state.model.frames[frame].parentJoint
+        inertia = state.model.inertias[joint]
+        com = state.data.oMi[joint].act(inertia.lever)
+        return point_force(com, np.array([0.0, 0.0, inertia.mass * GRAVITY]))
+
+    @dg.output(shape=(6,))
+    def wrench(self, t: int) -> np.ndarray:
+        """Total wrench of the ground on the robot, world axes, torque about the origin."""
+        state: RobotState = self.robot(t)
+        total = np.zeros(6)
+        for inp, frame in zip(self._inputs, self._frame_ids(state), strict=True):
+            placement = state.frame_placement(frame)
+            total += world_wrench(placement.translation, placement.rotation, inp(t))
+            if self.compensate_feet:
+                total += self._foot_weight(state, frame)
+        return total
+
+    @dg.output(shape=(), depends=("wrench",))
+    def normal_force(self, t: int) -> float:
+        """Total vertical contact force (N)."""
+        return float(self.wrench(t)[2])
+
+    @dg.output(shape=(3,), depends=("wrench", "robot"), labels=("x", "y", "z"))
+    def zmp(self, t: int) -> np.ndarray:
+        """The ZMP on the ground plane (world)."""
+        wrench = self.wrench(t)
+        if wrench[2] >= self.min_normal_force:
+            return zero_moment_point(wrench, self.height)
+        state: RobotState = self.robot(t)
+        middle = np.mean([state.frame_placement(f).translation for f in self._frame_ids(state)], axis=0)
+        return np.array([middle[0], middle[1], self.height])
