@@ -48,6 +48,15 @@ _PROXQP_STATUS = {
 }
 
 
+def proxqp_status(results: object) -> int:
+    """The module's status code for ProxQP ``results`` (``NOT_FINITE`` for a "solved" answer
+    with non-finite entries)."""
+    status = _PROXQP_STATUS.get(results.info.status.name, NOT_SOLVED)
+    if status == SOLVED and not np.isfinite(results.x).all():
+        return NOT_FINITE
+    return status
+
+
 @dataclass(slots=True)
 class Passivity:
     """What a passive solve needs from an energy tank (thesis Eq. 5.34): the task scale
@@ -265,9 +274,7 @@ class InverseDynamicsQP:
         else:
             qp.solve(*guess)
         results = qp.results
-        status = _PROXQP_STATUS.get(results.info.status.name, NOT_SOLVED)
-        if status == SOLVED and not np.isfinite(results.x).all():
-            status = NOT_FINITE
+        status = proxqp_status(results)
         if status == SOLVED:
             ws.latest = (results.x.copy(), results.y.copy(), results.z.copy())
         else:

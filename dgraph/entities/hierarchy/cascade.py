@@ -1,0 +1,312 @@
+"""The lexicographic cascade: strict-priority least squares with equalities and inequalities.
+
+Levels ``1 ≺ 2 ≺ … ≺ N`` over variables ``x`` (n). Level ``k`` is solved after every level
+above it has been fixed at its optimum (thesis Eq. 4.4; Saab et al., thesis Eq. 2.59):
+
+```
+(r_k*, s_k*) = argmin_{x, s} ||A_k x - b_k||^2 + ||s||^2
+               s.t.  l_k <= C_k x - s <= u_k                    this level's inequalities, relaxed by s
+                     A_j x - b_j = r_j*                         every level j above: equalities at their
+                     l_j <= C_j x - s_j* <= u_j                 optimal residual, inequalities at their
+                                                                optimal slack
+```
+
+Both ``r_k* = A_k x* - b_k`` and ``s_k*`` are unique (the cost is strictly convex in them), so
+"keep level j optimal" is the same as the two constraints above. How they are kept:
+
+- equalities by **elimination**: ``x = x_{k-1} + Z_{k-1} z`` where ``x_{k-1}`` solves the levels
+  above and the orthonormal columns of ``Z_{k-1}`` span the null space of their stacked equality
+  matrices; ``Z_k = Z_{k-1} V_0`` with ``V_0`` the null space of ``A_k Z_{k-1}`` (pivoted QR).
+  A level whose free space is empty is not solved: it cannot change ``x`` any more;
+- inequalities by **relaxed bounds**: after level j, its rows are kept as
+  ``min(l_j, C_j x_j) <= C_j x <= max(u_j, C_j x_j)``. With every other level-j quantity fixed,
+  a row cannot be violated less than at the optimum, so this is the same set as the
+  optimal-slack form, and ``x_j`` satisfies it exactly (no drift between levels).
+
+Each level is first solved in closed form, ``z = (A_k Z)^+ (b_k - A_k x_{k-1})`` (the
+minimum-norm least-squares step, from the same QR). When that point satisfies every kept
+inequality and the level's own, it is optimal (the cost cannot be lower than the
+unconstrained least squares with zero slack). Otherwise the level is a ProxQP problem in
+``(z, s)``, with no equality row:
+
+```
+min  ||A_k Z z - (b_k - A_k x_{k-1})||^2 + ||s||^2
+s.t. min(l_j, C_j x_j) - C_j x_{k-1} <= C_j Z z <= max(u_j, C_j x_j) - C_j x_{k-1}      j < k
+     l_k - C_k x_{k-1} <= C_k Z z - s <= u_k - C_k x_{k-1}
+```
+
+One ProxQP dense object is kept per structure (the keys of the levels down to this one and the
+free dimension), warm-started with the latest earlier tick's answer of the same structure
+mapped into the current basis (``z = Z^T (x_prev_tick - x_{k-1})``) and its multipliers.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Hashable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import proxsuite
+from scipy.linalg import lapack
+
+from dgraph.entities.solvers.inverse_dynamics_qp import INFINITY, NOT_FINITE, SOLVED, proxqp_status
+
+
+@dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
+class Level:
+    """One priority level: ``A x = b`` (``m_e`` rows) and ``l <= C x <= u`` (``m_i`` rows).
+
+    ``key`` names the level's structure (which tasks, how many rows): two levels with the same
+    key at the same place in the stack share a ProxQP workspace and its warm start.
+    """
+
+    key: Hashable
+    equality_matrix: np.ndarray
+    equality_vector: np.ndarray
+    inequality_matrix: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+
+    def residual(self, x: np.ndarray) -> float:
+        """``sqrt(||A x - b||^2 + ||s||^2)`` with ``s`` the inequality violation at ``x``."""
+        equality = self.equality_matrix @ x - self.equality_vector
+        values = self.inequality_matrix @ x
+        violation = values - np.clip(values, self.lower, self.upper)
+        return math.sqrt(float(equality @ equality + violation @ violation))
+
+    def is_valid(self) -> bool:
+        """Finite matrices and equality targets, bounds without NaN and with ``l <= u``."""
+        square = (np.vdot(self.equality_matrix, self.equality_matrix) + np.vdot(self.equality_vector,
+                  self.equality_vector) + np.vdot(self.inequality_matrix, self.inequality_matrix))
+        return math.isfinite(square) and bool((self.lower <= self.upper).all())
+
+
+@dataclass(slots=True)
+class CascadeSolution:
+    """The cascade's answer: ``x``, ``status`` (the codes of
+    :mod:`~dgraph.entities.solvers.inverse_dynamics_qp`; ``NOT_FINITE`` also for crossed bounds
+    ``l > u``; ``x`` is zeros unless ``SOLVED``), ``iterations`` (ProxQP, summed), ``qp_levels``
+    (levels that needed ProxQP), ``solve_time`` (s), and the ``levels`` solved."""
+
+    x: np.ndarray
+    status: int
+    iterations: int
+    qp_levels: int
+    solve_time: float
+    levels: Sequence[Level]
+
+    @property
+    def residuals(self) -> np.ndarray:
+        """One per level, :meth:`Level.residual` at ``x`` (inf for an invalid level); computed
+        on request (the solve itself does not need them)."""
+        return np.array([level.residual(self.x) if level.is_valid() else math.inf for level in self.levels])
+
+
+@dataclass(slots=True)
+class _Workspace:
+    """A ProxQP object and its matrices for one level structure (see the module docstring)."""
+
+    qp: object
+    H: np.ndarray
+    g: np.ndarray
+    C: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    initialised: bool = False
+    latest: tuple[np.ndarray, np.ndarray] | None = None  # last answer: x (full space), inequality multipliers
+    guess: tuple[np.ndarray, np.ndarray] | None = None  # the warm start of this tick's solves
+    tick: int | None = None  # the tick ``guess`` serves
+
+
+@dataclass(slots=True)
+class _Kept:
+    """The relaxed inequalities of the levels already solved."""
+
+    matrices: list[np.ndarray] = field(default_factory=list)
+    lower: list[np.ndarray] = field(default_factory=list)
+    upper: list[np.ndarray] = field(default_factory=list)
+
+    def add(self, level: Level, x: np.ndarray) -> None:
+        """Keep ``level``'s inequalities, relaxed to include their value at its optimum ``x``."""
+        if len(level.lower):
+            values = level.inequality_matrix @ x
+            self.matrices.append(level.inequality_matrix)
+            self.lower.append(np.minimum(level.lower, values))
+            self.upper.append(np.maximum(level.upper, values))
+
+    def hold(self, x: np.ndarray, tolerance: float) -> bool:
+        """Whether ``x`` satisfies every kept row within ``tolerance``."""
+        for matrix, lower, upper in zip(self.matrices, self.lower, self.upper, strict=True):
+            values = matrix @ x
+            if (values < lower - tolerance).any() or (values > upper + tolerance).any():
+                return False
+        return True
+
+    def stacked(self, columns: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """All kept rows as one ``(C, l, u)``."""
+        if not self.matrices:
+            return np.zeros((0, columns)), np.zeros(0), np.zeros(0)
+        return np.vstack(self.matrices), np.concatenate(self.lower), np.concatenate(self.upper)
+
+
+def _holds(level: Level, x: np.ndarray, tolerance: float) -> bool:
+    """Whether ``x`` satisfies ``level``'s own inequalities within ``tolerance``."""
+    values = level.inequality_matrix @ x
+    return not ((values < level.lower - tolerance).any() or (values > level.upper + tolerance).any())
+
+
+class LexicographicCascade:
+    """Solves a stack of :class:`Level` (highest priority first); see the module docstring.
+
+    ``eps_abs`` and ``max_iterations`` are ProxQP's; ``rank_tolerance``: diagonal entries of the pivoted
+    QR factor of ``(A_k Z)^T`` below ``rank_tolerance * max(1, |R_11|)`` count as zero (those directions stay
+    free for the levels below); ``feasibility_tolerance``: how far a closed-form step may
+    violate an inequality and still be accepted; ``closed_form`` false sends every level with
+    rows to ProxQP (for tests and benchmarks).
+    """
+
+    def __init__(self, *, eps_abs: float = 1e-9, max_iterations: int = 1000, rank_tolerance: float = 1e-9,
+                 feasibility_tolerance: float = 1e-9, closed_form: bool = True):
+        self.eps_abs, self.max_iterations = eps_abs, max_iterations
+        self.rank_tolerance, self.feasibility_tolerance = rank_tolerance, feasibility_tolerance
+        self.closed_form = closed_form
+        self._workspaces: dict[Hashable, _Workspace] = {}
+
+    def solve(self, levels: Sequence[Level], n: int, tick: int | None = None) -> CascadeSolution:
+        """Solve ``levels`` over ``n`` variables; never raises on a numerical failure.
+
+        ``tick`` selects the warm start: the answers of the latest earlier tick, so solving
+        twice at the same tick gives the same answer.
+        """
+        start = time.perf_counter()
+        if not all(level.is_valid() for level in levels):
+            return self._failure(levels, n, NOT_FINITE, 0, 0, start)
+        x, basis, kept = np.zeros(n), np.eye(n), _Kept()
+        iterations = qp_levels = 0
+        for index, level in enumerate(levels):
+            if basis.shape[1] == 0:
+                break
+            if not len(level.equality_vector) and not len(level.lower):
+                continue
+            step, free = self._least_squares(level, x, basis)
+            candidate = x + step
+            if not (self.closed_form and _holds(level, candidate, self.feasibility_tolerance)
+                    and kept.hold(candidate, self.feasibility_tolerance)):
+                key = (tuple(lv.key for lv in levels[:index + 1]), basis.shape[1])
+                status, its, candidate = self._solve_qp(key, level, x, basis, kept, tick)
+                iterations, qp_levels = iterations + its, qp_levels + 1
+                if status != SOLVED:
+                    return self._failure(levels, n, status, iterations, qp_levels, start)
+            x = candidate
+            kept.add(level, x)
+            basis = free
+        return CascadeSolution(x, SOLVED, iterations, qp_levels, time.perf_counter() - start, levels)
+
+    def _least_squares(self, level: Level, x: np.ndarray, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The minimum-norm least-squares step of ``level``'s equalities in the free space, and
+        the basis of the directions that stay free below it (orthonormal columns).
+
+        A column-pivoted QR of ``(A_k Z)^T = Q R Pi^T`` (LAPACK ``dgeqp3``; an SVD costs 5 to 10
+        times more at these sizes) splits ``Z Q`` into the row space of ``A_k Z`` (the first
+        ``rank`` columns) and its null space; the step is ``Z Q_1 y`` with
+        ``y = argmin ||R_1^T y - Pi^T (b_k - A_k x)||`` (full column rank: a triangular solve when
+        the rows are independent, else ``dgels``).
+        """
+        if not len(level.equality_vector):
+            return np.zeros(len(x)), basis
+        projected = level.equality_matrix @ basis
+        target = level.equality_vector - level.equality_matrix @ x
+        qr, pivots, tau, _, _ = lapack.dgeqp3(projected.T)
+        diagonal = np.abs(qr.diagonal())
+        rank = int(np.count_nonzero(diagonal > self.rank_tolerance * max(1.0, diagonal[0] if len(diagonal) else 0.0)))
+        rotated, _, _ = lapack.dormqr("R", "N", qr[:, :len(tau)], tau, basis, lwork=64 * max(1, len(x)))
+        if rank == 0:
+            return np.zeros(len(x)), rotated
+        permuted = target[pivots - 1]
+        if rank == len(target):  # independent rows (the usual case): R_1^T is square, triangular
+            y, _ = lapack.dtrtrs(qr[:rank, :rank], permuted, trans=1)
+        else:
+            y = lapack.dgels(np.triu(qr[:rank]).T, permuted)[1][:rank]
+        return rotated[:, :rank] @ y, rotated[:, rank:]
+
+    def _workspace(self, key: Hashable, n_qp: int, n_in: int, free: int) -> _Workspace:
+        ws = self._workspaces.get(key)
+        if ws is None:
+            qp = proxsuite.proxqp.dense.QP(n_qp, 0, n_in)
+            qp.settings.eps_abs = self.eps_abs
+            qp.settings.eps_rel = 0.0
+            qp.settings.max_iter = self.max_iterations
+            qp.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START
+            # every level problem is feasible (z = 0 meets the kept rows, s absorbs its own) and
+            # bounded (a least squares): ProxQP's default 1e-4 infeasibility tests gave false alarms
+            qp.settings.eps_primal_inf = qp.settings.eps_dual_inf = 1e-12
+            ws = _Workspace(qp, np.zeros((n_qp, n_qp)), np.zeros(n_qp), np.zeros((n_in, n_qp)), np.zeros(n_in),
+                            np.zeros(n_in))
+            slack = np.arange(free, n_qp)
+            ws.H[slack, slack] = 2.0  # ||s||^2
+            ws.C[np.arange(n_in - len(slack), n_in), slack] = -1.0  # C_k Z z - s
+            self._workspaces[key] = ws
+        return ws
+
+    def _solve_qp(self, key: Hashable, level: Level, x: np.ndarray, basis: np.ndarray, kept: _Kept,
+                  tick: int | None) -> tuple[int, int, np.ndarray]:
+        """The level as a ProxQP problem in ``(z, s)``: ``(status, iterations, x)``."""
+        free, m_own = basis.shape[1], len(level.lower)
+        kept_matrix, kept_lower, kept_upper = kept.stacked(len(x))
+        m_kept = len(kept_lower)
+        ws = self._workspace(key, free + m_own, m_kept + m_own, free)
+        projected = level.equality_matrix @ basis
+        ws.H[:free, :free] = 2.0 * projected.T @ projected
+        ws.g[:free] = -2.0 * projected.T @ (level.equality_vector - level.equality_matrix @ x)
+        for rows, matrix, lower, upper, widest in (
+                (slice(0, m_kept), kept_matrix, kept_lower, kept_upper, 0.0),
+                (slice(m_kept, None), level.inequality_matrix, level.lower, level.upper, -INFINITY)):
+            ws.C[rows, :free] = matrix @ basis
+            values = matrix @ x
+            # kept rows hold at z = 0 (x satisfies them up to the tolerances of the levels between)
+            ws.lower[rows] = np.clip(np.minimum(lower - values, -widest), -INFINITY, INFINITY)
+            ws.upper[rows] = np.clip(np.maximum(upper - values, widest), -INFINITY, INFINITY)
+        if tick is None or tick != ws.tick:
+            ws.guess, ws.tick = ws.latest, tick
+        status, iterations = self._run(ws, self._guess(ws, level, x, basis))
+        if status != SOLVED:
+            return status, iterations, x
+        solution = x + basis @ ws.qp.results.x[:free]
+        ws.latest = (solution, ws.qp.results.z.copy())
+        return status, iterations, solution
+
+    @staticmethod
+    def _guess(ws: _Workspace, level: Level, x: np.ndarray,
+               basis: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """The warm start ``(z, s), y, multipliers`` mapped from the latest earlier answer."""
+        if ws.guess is None:
+            return None
+        previous, multipliers = ws.guess
+        z = basis.T @ (previous - x)
+        values = level.inequality_matrix @ (x + basis @ z)
+        slack = values - np.clip(values, level.lower, level.upper)
+        return np.concatenate([z, slack]), np.zeros(0), multipliers
+
+    def _run(self, ws: _Workspace, guess: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> tuple[int, int]:
+        """ProxQP on the workspace, warm or cold: ``(status, iterations)``. The preconditioner
+        is recomputed at every solve (the basis ``Z`` changes from tick to tick)."""
+        qp = ws.qp
+        if ws.initialised:
+            qp.update(ws.H, ws.g, None, None, ws.C, ws.lower, ws.upper)
+        else:
+            qp.init(ws.H, ws.g, None, None, ws.C, ws.lower, ws.upper)
+            ws.initialised = True
+        if guess is None:
+            qp.solve()
+        else:
+            qp.solve(*guess)
+        return proxqp_status(qp.results), int(qp.results.info.iter)
+
+    def _failure(self, levels: Sequence[Level], n: int, status: int, iterations: int, qp_levels: int,
+                 start: float) -> CascadeSolution:
+        """Zeros and ``status``; every warm start is dropped (the next tick starts cold)."""
+        for ws in self._workspaces.values():
+            ws.initialised, ws.latest, ws.guess = False, None, None
+        return CascadeSolution(np.zeros(n), status, iterations, qp_levels, time.perf_counter() - start, levels)

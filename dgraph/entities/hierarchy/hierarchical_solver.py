@@ -1,0 +1,145 @@
+"""HierarchicalSolver: strict-priority inverse kinematics (SoT's stack of tasks) as an entity."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.hierarchy.cascade import CascadeSolution, Level, LexicographicCascade
+from dgraph.entities.hierarchy.rows import PriorityRows
+from dgraph.entities.hierarchy.stack import StackCommands
+from dgraph.entities.robot.robot_state import load_model
+
+
+def stacked_level(key: object, rows: list[PriorityRows]) -> Level:
+    """One :class:`Level` from the rows of its active tasks."""
+    if len(rows) == 1:
+        r = rows[0]
+        return Level(key, r.equality_matrix, r.equality_vector, r.inequality_matrix, r.lower, r.upper)
+    return Level(key, np.vstack([r.equality_matrix for r in rows]),
+                 np.concatenate([r.equality_vector for r in rows]),
+                 np.vstack([r.inequality_matrix for r in rows]),
+                 np.concatenate([r.lower for r in rows]), np.concatenate([r.upper for r in rows]))
+
+
+@dg.register
+class HierarchicalSolver(StackCommands, dg.Entity):
+    """Velocity-level inverse kinematics with strict priorities (thesis §4.2.1, Eq. 4.3–4.4;
+    Saab et al., Eq. 2.59).
+
+    Every tick, the levels of ``stack`` (highest first) are solved lexicographically over the
+    velocity ``v`` (nv) by :class:`~dgraph.entities.hierarchy.cascade.LexicographicCascade`:
+    level ``k`` minimises ``||A_k v - b_k||^2 + ||s_k||^2`` (equalities and the slack ``s_k`` of
+    its inequalities ``l_k <= C_k v - s_k <= u_k``) while every level above keeps its optimal
+    residual and slack; a lower level never degrades a higher one. A last, implicit level
+    ``min ||v||^2`` makes ``v`` unique. The rows of a level are those of its active tasks
+    (:class:`PriorityRows` from :class:`VelocityTask`, :class:`VelocityContact`,
+    :class:`JointLimits`); Table 4.1's stack is contacts and limits at 0, then CoM height, CoM
+    lateral-sagittal, waist orientation, posture.
+
+    Failures never raise: non-finite rows or a failed ProxQP level give ``status`` (the codes
+    of the inverse-dynamics solver: 0 solved, 1 max iterations, 2 primal infeasible, 3 dual
+    infeasible, 4 not finite, 5 other) and ``velocity = 0`` (the robot stops); the next tick
+    starts cold.
+
+    Parameters: ``model`` (sizes ``v``), ``tasks`` (names of the task inputs), ``priorities``
+    (one per task, 0 highest, equal values share a level; default: one level per task in
+    order), ``eps_abs``, ``max_iterations`` (ProxQP), ``rank_tolerance``, ``closed_form``
+    (false: every level goes to ProxQP; see the cascade).
+    Inputs: one per task (a ``rows`` output), ``stack`` (the levels; edited by the commands
+    ``push(task, level=None)``, ``remove(task)``, ``up(task)``, ``down(task)``, ``clear()``;
+    ``levels()`` lists them).
+    Outputs: ``solution`` (:class:`CascadeSolution`), ``velocity`` (nv, the command of a
+    velocity-controlled device or an integrator), ``level_residuals`` (one per level of the
+    stack, then the final ``||v||``), ``status``, ``iterations``, ``qp_levels`` (levels that
+    needed ProxQP), ``solve_time`` (s).
+    """
+
+    model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes v)")
+    tasks = dg.Param((), kind="str_list", doc="task input names")
+    priorities = dg.Param((), kind="int_list", doc="priority of each task (0 highest); default: in order")
+    eps_abs = dg.Param(1e-9, kind="float", minimum=1e-12, maximum=1e-3, doc="ProxQP absolute tolerance")
+    max_iterations = dg.Param(1000, kind="int", minimum=1, doc="ProxQP iteration limit")
+    rank_tolerance = dg.Param(1e-9, kind="float", minimum=0.0, doc="relative singular-value threshold")
+    closed_form = dg.Param(True, kind="bool", doc="solve a level in closed form when no inequality binds")
+
+    def configure(self) -> None:
+        """Size ``v``, declare the task inputs and the stack."""
+        self.nv = load_model(self.model, self.name).nv
+        declare_task_inputs(self, "rows of task")
+        self.declare_stack(self.priorities)
+        self._cascade = LexicographicCascade(eps_abs=self.eps_abs, max_iterations=self.max_iterations,
+                                             rank_tolerance=self.rank_tolerance, closed_form=self.closed_form)
+        self._minimum_norm = Level("minimum_norm", np.eye(self.nv), np.zeros(self.nv), np.zeros((0, self.nv)),
+                                   np.zeros(0), np.zeros(0))
+
+    def setup(self) -> None:
+        """Index the task inputs."""
+        self._inputs = {name: getattr(self, name) for name in self.tasks}
+
+    def _rows(self, name: str, t: int) -> PriorityRows:
+        """The task's rows, checked (``SpecError`` naming the input)."""
+        rows = self._inputs[name](t)
+        if not isinstance(rows, PriorityRows):
+            raise dg.SpecError(f"{self.name}.{name} at tick {t}: expected PriorityRows (a task's rows output), got "
+                               f"{type(rows).__name__}", entity=self.name, signal=name)
+        problem = rows.shape_problem(self.nv)
+        if problem is not None:
+            raise dg.SpecError(f"{self.name}.{name} at tick {t}: {problem} (the robot has nv = {self.nv})",
+                               entity=self.name, signal=name)
+        return rows
+
+    def _levels(self, t: int) -> list[Level]:
+        levels = []
+        for level in self.read_stack(t):
+            active = [(name, rows) for name in level if (rows := self._rows(name, t)).active]
+            if active:
+                key = tuple((name, len(r.equality_vector), len(r.lower)) for name, r in active)
+                levels.append(stacked_level(key, [r for _, r in active]))
+        return [*levels, self._minimum_norm]
+
+    @dg.output(dtype="object")
+    def solution(self, t: int) -> CascadeSolution:
+        """The cascade's answer at ``t``."""
+        return self._cascade.solve(self._levels(t), self.nv, t)
+
+    @dg.output(shape=("nv",), depends=("solution",))
+    def velocity(self, t: int) -> np.ndarray:
+        """``v`` (zeros after a failure)."""
+        return self.solution(t).x
+
+    @dg.output(shape=None, depends=("solution",))
+    def level_residuals(self, t: int) -> np.ndarray:
+        """``sqrt(||A_k v - b_k||^2 + ||s_k||^2)`` per level with rows, then ``||v||``."""
+        return self.solution(t).residuals
+
+    @dg.output(shape=(), dtype="int", depends=("solution",))
+    def status(self, t: int) -> int:
+        """0 when solved; see the class docstring for the failure codes."""
+        return self.solution(t).status
+
+    @dg.output(shape=(), dtype="int", depends=("solution",))
+    def iterations(self, t: int) -> int:
+        """ProxQP iterations, summed over the levels."""
+        return self.solution(t).iterations
+
+    @dg.output(shape=(), dtype="int", depends=("solution",))
+    def qp_levels(self, t: int) -> int:
+        """How many levels needed ProxQP (the others were solved in closed form)."""
+        return self.solution(t).qp_levels
+
+    @dg.output(shape=(), depends=("solution",))
+    def solve_time(self, t: int) -> float:
+        """Wall time of the cascade (s)."""
+        return self.solution(t).solve_time
+
+
+def declare_task_inputs(entity: dg.Entity, what: str) -> None:
+    """One object input per name in ``entity.tasks`` (``ParamError`` for an unusable name)."""
+    names = list(entity.tasks)
+    if len(set(names)) != len(names):
+        raise dg.ParamError(f"{entity.name}: task names must be unique: {names}", entity=entity.name)
+    for name in names:
+        if not name.isidentifier() or hasattr(type(entity), name) or name == "stack":
+            raise dg.ParamError(f"{entity.name}: {name!r} cannot name an input of the solver", entity=entity.name)
+        entity.declare(name, dg.Input(dtype="object", doc=f"{what} {name}"))
