@@ -139,3 +139,16 @@ def test_the_command_does_not_close_a_loop_through_the_fed_back_state():
     graph, _, _ = make("velocity")
     graph.plug("integrator.v", "integrator.command")  # q -> QP -> command, here the identity
     graph.validate()
+
+
+def test_a_fixed_base_robot_commands_its_whole_configuration():
+    model = pin.Model()
+    model.addJoint(0, pin.JointModelRX(), pin.SE3.Identity(), "only")
+    graph = dg.Graph(dt=DT)
+    graph.add(Ticker("clock"))
+    integrator = graph.add(ConfigurationIntegrator("integrator", model=model))
+    integrator.measured_q.set([0.5])
+    integrator.measured_v.set([0.0])
+    integrator.command.set([2.0])
+    assert np.allclose(integrator.joint_position(0), [0.5 + 2.0 * DT])
+    assert np.allclose(integrator.joint_velocity(0), [2.0])

@@ -41,8 +41,8 @@ class ConfigurationIntegrator(dg.Entity):
     ``sync`` (bool, default false).
     States: ``integrated_q``, ``integrated_v`` (the integration, one tick behind ``q⁺``, ``v⁺``).
     Outputs: ``q``, ``v`` (the state the QP sees at ``t``: integrated, or measured when
-    synchronising), ``next_q``, ``next_v`` (``q⁺``, ``v⁺``), ``joint_position`` (na),
-    ``joint_velocity`` (na).
+    synchronising), ``next_q``, ``next_v`` (``q⁺``, ``v⁺``), ``joint_position`` (nq without the free flyer),
+    ``joint_velocity`` (nv without the free flyer).
     """
 
     has_state = True
@@ -69,8 +69,10 @@ class ConfigurationIntegrator(dg.Entity):
 
         self.pin_model = load_model(self.model, self.name)
         self.nq, self.nv = self.pin_model.nq, self.pin_model.nv
-        self.n_base = 6 if self.nq != self.nv else 0
-        self.na = self.nv - self.n_base
+        model = self.pin_model
+        floating = model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer"
+        self._base_q, self._base_v = (7, 6) if floating else (0, 0)
+        self.nqa, self.na = self.nq - self._base_q, self.nv - self._base_v
         self._neutral = pin.neutral(self.pin_model)
         self._integrate = lambda q, dq: pin.integrate(self.pin_model, q, dq)
 
@@ -108,15 +110,15 @@ class ConfigurationIntegrator(dg.Entity):
         """``v⁺``."""
         return self.next_state(t)[1]
 
-    @dg.output(shape=("na",), depends=("next_state",))
+    @dg.output(shape=("nqa",), depends=("next_state",))
     def joint_position(self, t: int) -> np.ndarray:
         """Actuated part of ``q⁺``: the joint position command."""
-        return self.next_state(t)[0][self.nq - self.na:]
+        return self.next_state(t)[0][self._base_q:]
 
     @dg.output(shape=("na",), depends=("next_state",))
     def joint_velocity(self, t: int) -> np.ndarray:
         """Actuated part of ``v⁺``: the joint velocity reference."""
-        return self.next_state(t)[1][self.n_base:]
+        return self.next_state(t)[1][self._base_v:]
 
     def prepare_state(self, t: int) -> None:
         """Stage ``q⁺``, ``v⁺``."""
