@@ -18,10 +18,12 @@ Both ``r_k* = A_k x* - b_k`` and ``s_k*`` are unique (the cost is strictly conve
   above and the orthonormal columns of ``Z_{k-1}`` span the null space of their stacked equality
   matrices; ``Z_k = Z_{k-1} V_0`` with ``V_0`` the null space of ``A_k Z_{k-1}`` (pivoted QR).
   A level whose free space is empty is not solved: it cannot change ``x`` any more;
-- inequalities by **relaxed bounds**: after level j, its rows are kept as
-  ``min(l_j, C_j x_j) <= C_j x <= max(u_j, C_j x_j)``. With every other level-j quantity fixed,
-  a row cannot be violated less than at the optimum, so this is the same set as the
-  optimal-slack form, and ``x_j`` satisfies it exactly (no drift between levels).
+- inequalities by **their optimal slack**: ``s_j*`` is unique, so a row violated at level j's
+  optimum (by more than ``pin_tolerance``) keeps exactly that violation below: it is
+  **pinned**, ``C_j,i x = C_j,i x_j``, and eliminated like an equality (a pinned pair of
+  conflicting rows would otherwise be a degenerate implicit equality for ProxQP). A row that holds is kept as
+  ``min(l_j, C_j x_j) <= C_j x <= max(u_j, C_j x_j)`` (its bounds, widened by the tolerance
+  the levels solved since may have used, so that ``x`` stays feasible: no drift).
 
 Each level is first solved in closed form, ``z = (A_k Z)^+ (b_k - A_k x_{k-1})`` (the
 minimum-norm least-squares step, from the same QR). When that point satisfies every kept
@@ -35,9 +37,10 @@ s.t. min(l_j, C_j x_j) - C_j x_{k-1} <= C_j Z z <= max(u_j, C_j x_j) - C_j x_{k-
      l_k - C_k x_{k-1} <= C_k Z z - s <= u_k - C_k x_{k-1}
 ```
 
-One ProxQP dense object is kept per structure (the keys of the levels down to this one and the
-free dimension), warm-started with the latest earlier tick's answer of the same structure
-mapped into the current basis (``z = Z^T (x_prev_tick - x_{k-1})``) and its multipliers.
+One ProxQP dense object is kept per structure (the keys of the levels down to this one, the
+free dimension and the number of kept rows that can still move), warm-started with the latest
+earlier tick's answer of the same structure mapped into the current basis
+(``z = Z^T (x_prev_tick - x_{k-1})``) and its multipliers.
 """
 
 from __future__ import annotations
@@ -128,13 +131,18 @@ class _Kept:
     lower: list[np.ndarray] = field(default_factory=list)
     upper: list[np.ndarray] = field(default_factory=list)
 
-    def add(self, level: Level, x: np.ndarray) -> None:
-        """Keep ``level``'s inequalities, relaxed to include their value at its optimum ``x``."""
-        if len(level.lower):
-            values = level.inequality_matrix @ x
-            self.matrices.append(level.inequality_matrix)
-            self.lower.append(np.minimum(level.lower, values))
-            self.upper.append(np.maximum(level.upper, values))
+    def add(self, level: Level, x: np.ndarray, tolerance: float) -> np.ndarray | None:
+        """Keep ``level``'s inequalities that hold at its optimum ``x`` (within ``tolerance``;
+        relaxed to include their value there) and return the violated ones, which are pinned."""
+        if not len(level.lower):
+            return None
+        values = level.inequality_matrix @ x
+        violated = (values < level.lower - tolerance) | (values > level.upper + tolerance)
+        holding = ~violated
+        self.matrices.append(level.inequality_matrix[holding])
+        self.lower.append(np.minimum(level.lower[holding], values[holding]))
+        self.upper.append(np.maximum(level.upper[holding], values[holding]))
+        return level.inequality_matrix[violated] if violated.any() else None
 
     def hold(self, x: np.ndarray, tolerance: float) -> bool:
         """Whether ``x`` satisfies every kept row within ``tolerance``."""
@@ -157,19 +165,33 @@ def _holds(level: Level, x: np.ndarray, tolerance: float) -> bool:
     return not ((values < level.lower - tolerance).any() or (values > level.upper + tolerance).any())
 
 
+def _level_cost(projected: np.ndarray, target: np.ndarray, own: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                z: np.ndarray) -> float:
+    """``||A Z z - target||^2 + ||s||^2`` with ``s`` the violation of the level's own rows."""
+    residual = projected @ z - target
+    values = own @ z
+    violation = values - np.clip(values, lower, upper)
+    return float(residual @ residual + violation @ violation)
+
+
 class LexicographicCascade:
     """Solves a stack of :class:`Level` (highest priority first); see the module docstring.
 
-    ``eps_abs`` and ``max_iterations`` are ProxQP's; ``rank_tolerance``: diagonal entries of the pivoted
+    ``eps_abs`` and ``max_iterations`` are ProxQP's (1e-8: its answer is then polished on its
+    active set, exact to rounding; at 1e-9 ProxQP sometimes stalls just above the tolerance);
+    ``rank_tolerance``: diagonal entries of the pivoted
     QR factor of ``(A_k Z)^T`` below ``rank_tolerance * max(1, |R_11|)`` count as zero (those directions stay
     free for the levels below); ``feasibility_tolerance``: how far a closed-form step may
-    violate an inequality and still be accepted; ``closed_form`` false sends every level with
+    violate an inequality and still be accepted; ``pin_tolerance``: the violation above which
+    a row counts as violated at its level's optimum and is pinned (below it, a row at its bound
+    could be a ProxQP rounding of an active row, which must not be pinned); ``closed_form`` false sends every level with
     rows to ProxQP (for tests and benchmarks).
     """
 
-    def __init__(self, *, eps_abs: float = 1e-9, max_iterations: int = 1000, rank_tolerance: float = 1e-9,
-                 feasibility_tolerance: float = 1e-9, closed_form: bool = True):
+    def __init__(self, *, eps_abs: float = 1e-8, max_iterations: int = 1000, rank_tolerance: float = 1e-9,
+                 feasibility_tolerance: float = 1e-9, pin_tolerance: float = 1e-6, closed_form: bool = True):
         self.eps_abs, self.max_iterations = eps_abs, max_iterations
+        self.pin_tolerance = pin_tolerance
         self.rank_tolerance, self.feasibility_tolerance = rank_tolerance, feasibility_tolerance
         self.closed_form = closed_form
         self._workspaces: dict[Hashable, _Workspace] = {}
@@ -190,7 +212,8 @@ class LexicographicCascade:
                 break
             if not len(level.equality_vector) and not len(level.lower):
                 continue
-            step, free = self._least_squares(level, x, basis)
+            equalities = level.equality_matrix
+            step, free = self._least_squares(equalities, level.equality_vector - equalities @ x, basis)
             candidate = x + step
             if not (self.closed_form and _holds(level, candidate, self.feasibility_tolerance)
                     and kept.hold(candidate, self.feasibility_tolerance)):
@@ -200,13 +223,14 @@ class LexicographicCascade:
                 if status != SOLVED:
                     return self._failure(levels, n, status, iterations, qp_levels, start)
             x = candidate
-            kept.add(level, x)
-            basis = free
+            pinned = kept.add(level, x, self.pin_tolerance)
+            basis = free if pinned is None else self._least_squares(pinned, np.zeros(len(pinned)), free)[1]
         return CascadeSolution(x, SOLVED, iterations, qp_levels, time.perf_counter() - start, levels)
 
-    def _least_squares(self, level: Level, x: np.ndarray, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The minimum-norm least-squares step of ``level``'s equalities in the free space, and
-        the basis of the directions that stay free below it (orthonormal columns).
+    def _least_squares(self, matrix: np.ndarray, target: np.ndarray,
+                       basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The minimum-norm step ``Z z`` with ``z = argmin ||A Z z - target||``, and the basis
+        of the directions that stay free below (orthonormal columns spanning ``Z null(A Z)``).
 
         A column-pivoted QR of ``(A_k Z)^T = Q R Pi^T`` (LAPACK ``dgeqp3``; an SVD costs 5 to 10
         times more at these sizes) splits ``Z Q`` into the row space of ``A_k Z`` (the first
@@ -214,16 +238,16 @@ class LexicographicCascade:
         ``y = argmin ||R_1^T y - Pi^T (b_k - A_k x)||`` (full column rank: a triangular solve when
         the rows are independent, else ``dgels``).
         """
-        if not len(level.equality_vector):
-            return np.zeros(len(x)), basis
-        projected = level.equality_matrix @ basis
-        target = level.equality_vector - level.equality_matrix @ x
+        n = basis.shape[0]
+        if not len(target) or not basis.shape[1]:
+            return np.zeros(n), basis
+        projected = matrix @ basis
         qr, pivots, tau, _, _ = lapack.dgeqp3(projected.T)
         diagonal = np.abs(qr.diagonal())
         rank = int(np.count_nonzero(diagonal > self.rank_tolerance * max(1.0, diagonal[0] if len(diagonal) else 0.0)))
-        rotated, _, _ = lapack.dormqr("R", "N", qr[:, :len(tau)], tau, basis, lwork=64 * max(1, len(x)))
+        rotated, _, _ = lapack.dormqr("R", "N", qr[:, :len(tau)], tau, basis, lwork=64 * n)
         if rank == 0:
-            return np.zeros(len(x)), rotated
+            return np.zeros(n), rotated
         permuted = target[pivots - 1]
         if rank == len(target):  # independent rows (the usual case): R_1^T is square, triangular
             y, _ = lapack.dtrtrs(qr[:rank, :rank], permuted, trans=1)
@@ -236,7 +260,7 @@ class LexicographicCascade:
         if ws is None:
             qp = proxsuite.proxqp.dense.QP(n_qp, 0, n_in)
             qp.settings.eps_abs = self.eps_abs
-            qp.settings.eps_rel = 0.0
+            qp.settings.eps_rel = 1e-9  # relative to the data (pulls of 1e3 m/s happen); then polished
             qp.settings.max_iter = self.max_iterations
             qp.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START
             # every level problem is feasible (z = 0 meets the kept rows, s absorbs its own) and
@@ -255,8 +279,13 @@ class LexicographicCascade:
         """The level as a ProxQP problem in ``(z, s)``: ``(status, iterations, x)``."""
         free, m_own = basis.shape[1], len(level.lower)
         kept_matrix, kept_lower, kept_upper = kept.stacked(len(x))
+        # a kept row that z cannot move (C Z = 0: its directions are fixed above) holds at z = 0 and
+        # stays out: rows of 1e-16 wreck ProxQP's equilibration (false infeasibility reports)
+        movable = np.abs(kept_matrix @ basis).max(axis=1, initial=0.0) > self.rank_tolerance * max(
+            1.0, float(np.abs(kept_matrix).max(initial=0.0)))
+        kept_matrix, kept_lower, kept_upper = kept_matrix[movable], kept_lower[movable], kept_upper[movable]
         m_kept = len(kept_lower)
-        ws = self._workspace(key, free + m_own, m_kept + m_own, free)
+        ws = self._workspace((*key, m_kept), free + m_own, m_kept + m_own, free)
         projected = level.equality_matrix @ basis
         ws.H[:free, :free] = 2.0 * projected.T @ projected
         ws.g[:free] = -2.0 * projected.T @ (level.equality_vector - level.equality_matrix @ x)
@@ -271,11 +300,50 @@ class LexicographicCascade:
         if tick is None or tick != ws.tick:
             ws.guess, ws.tick = ws.latest, tick
         status, iterations = self._run(ws, self._guess(ws, level, x, basis))
+        if status != SOLVED:  # never a true infeasibility (see _workspace): once more, cold and looser
+            ws.initialised = False
+            ws.qp.settings.eps_abs = 100.0 * self.eps_abs
+            status, more = self._run(ws, None)
+            ws.qp.settings.eps_abs, iterations = self.eps_abs, iterations + more
         if status != SOLVED:
+            ws.initialised = False
             return status, iterations, x
-        solution = x + basis @ ws.qp.results.x[:free]
+        target = level.equality_vector - level.equality_matrix @ x
+        solution = x + basis @ self._polish(ws, projected, target, free, m_kept)
         ws.latest = (solution, ws.qp.results.z.copy())
         return status, iterations, solution
+
+    def _polish(self, ws: _Workspace, projected: np.ndarray, target: np.ndarray, free: int, m_kept: int) -> np.ndarray:
+        """ProxQP's ``z``, refined on its active set: the kept rows it stops at become equalities
+        and the level's own rows it stops at (or beyond) join the least squares, solved exactly
+        by the same QR elimination. ProxQP's answer is accurate to ``eps_abs`` in the KKT
+        residuals, which a small ``C Z`` can turn into a visibly early stop (1e-6 short of a
+        bound); the refined point is kept when it is feasible and no worse."""
+        results = ws.qp.results
+        z = results.x[:free]
+        multipliers = results.z
+        at_bound = np.where(multipliers > 0, ws.upper, ws.lower)
+        active = np.abs(multipliers) > 1e-10 * max(1.0, float(np.abs(multipliers).max(initial=0.0)))
+        kept_rows, own_rows = np.flatnonzero(active[:m_kept]), m_kept + np.flatnonzero(active[m_kept:])
+        rows = ws.C[:, :free]
+        base, null = self._least_squares(rows[kept_rows], at_bound[kept_rows], np.eye(free))
+        objective = np.vstack([projected, rows[own_rows]])
+        goal = np.concatenate([target, at_bound[own_rows]])
+        refined = base + self._least_squares(objective, goal - objective @ base, null)[0]
+        values = rows @ refined
+        inactive_own = np.ones(len(values), dtype=bool)
+        inactive_own[:m_kept] = False
+        inactive_own[own_rows] = False
+        must_hold = ~inactive_own
+        must_hold[m_kept:] = inactive_own[m_kept:]
+        tolerance = self.feasibility_tolerance
+        feasible = ((values[must_hold] >= ws.lower[must_hold] - tolerance).all()
+                    and (values[must_hold] <= ws.upper[must_hold] + tolerance).all())
+        own = (projected, target, rows[m_kept:], ws.lower[m_kept:], ws.upper[m_kept:])
+        found = _level_cost(*own, z)
+        if feasible and _level_cost(*own, refined) <= found + 1e-9 * (1e-6 + found):  # rounding aside, no worse
+            return refined
+        return z
 
     @staticmethod
     def _guess(ws: _Workspace, level: Level, x: np.ndarray,

@@ -58,7 +58,7 @@ class HierarchicalSolver(StackCommands, dg.Entity):
     model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes v)")
     tasks = dg.Param((), kind="str_list", doc="task input names")
     priorities = dg.Param((), kind="int_list", doc="priority of each task (0 highest); default: in order")
-    eps_abs = dg.Param(1e-9, kind="float", minimum=1e-12, maximum=1e-3, doc="ProxQP absolute tolerance")
+    eps_abs = dg.Param(1e-8, kind="float", minimum=1e-12, maximum=1e-3, doc="ProxQP absolute tolerance (then polished)")
     max_iterations = dg.Param(1000, kind="int", minimum=1, doc="ProxQP iteration limit")
     rank_tolerance = dg.Param(1e-9, kind="float", minimum=0.0, doc="relative singular-value threshold")
     closed_form = dg.Param(True, kind="bool", doc="solve a level in closed form when no inequality binds")
