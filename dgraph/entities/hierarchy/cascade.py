@@ -161,6 +161,8 @@ class _Kept:
 
 def _holds(level: Level, x: np.ndarray, tolerance: float) -> bool:
     """Whether ``x`` satisfies ``level``'s own inequalities within ``tolerance``."""
+    if not len(level.lower):
+        return True
     values = level.inequality_matrix @ x
     return not ((values < level.lower - tolerance).any() or (values > level.upper + tolerance).any())
 

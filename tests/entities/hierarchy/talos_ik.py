@@ -24,8 +24,9 @@ def half_sitting() -> np.ndarray:
     return load_model("talos").referenceConfigurations["half_sitting"].copy()
 
 
-def build(q: np.ndarray | None = None, *, hand: bool = False, **solver_params) -> dg.Graph:
-    """The Table 4.1 stack on a kinematic TALOS starting at ``q`` (default half-sitting)."""
+def build(q: np.ndarray | None = None, *, hand: bool = False, limits: bool = True, **solver_params) -> dg.Graph:
+    """The Table 4.1 stack on a kinematic TALOS starting at ``q`` (default half-sitting); with
+    ``limits`` the joint limits join the contacts at level 0 (Table 4.1 does not list them)."""
     g = dg.Graph(dt=0.001, name="talos_ik_test")
     q0 = half_sitting() if q is None else q
     g.add(KinematicDevice("device", control_mode="velocity", model="talos", q0=q0))
@@ -54,9 +55,9 @@ def build(q: np.ndarray | None = None, *, hand: bool = False, **solver_params) -
         g.plug("robot.state", f"{feature.name}.robot")
         g.plug("robot.state", f"{name}.robot")
         g.plug(f"{feature.name}.feature", f"{name}.feature")
-    tasks = ["left_foot", "right_foot", "limits", "com_height", "com_xy", *(["hand"] if hand else []), "waist",
-             "posture"]
-    priorities = [0, 0, 0, 1, 2, *([3] if hand else []), 3 + hand, 4 + hand]
+    tasks = ["left_foot", "right_foot", *(["limits"] if limits else []), "com_height", "com_xy",
+             *(["hand"] if hand else []), "waist", "posture"]
+    priorities = [0, 0, *([0] if limits else []), 1, 2, *([3] if hand else []), 3 + hand, 4 + hand]
     g.add(HierarchicalSolver("solver", tasks=tasks, priorities=priorities, **solver_params))
     for name in tasks:
         g.plug(f"{name}.rows", f"solver.{name}")
