@@ -38,6 +38,11 @@ class HierarchicalInverseDynamics(StackCommands, InverseDynamicsSolver):
     failed or infeasible solve gives the gravity-compensation fallback of
     :class:`InverseDynamicsSolver`.
 
+    Limits: task levels hold equalities over the accelerations only (a Task's equation), so a
+    force task or a task inequality cannot be a level here (inequalities live in the fixed
+    level); tasks are removed with the stack commands (a Task has no ``active`` input); the
+    energy tank's passive mode is not available (``passive: true`` is refused).
+
     Parameters: those of :class:`InverseDynamicsSolver` (``eps_abs`` and ``max_iterations``
     go to ProxQP), ``priorities`` (one per task, 0 highest; default: one level per task in
     order), ``rank_tolerance``, ``closed_form``, ``constraint_tolerance``.
@@ -55,6 +60,9 @@ class HierarchicalInverseDynamics(StackCommands, InverseDynamicsSolver):
 
     def configure(self) -> None:
         """The weighted solver's ports, the stack and the cascade."""
+        if self.passive:
+            raise dg.ParamError(f"{self.name}: the hierarchical solver has no passive mode (use "
+                                "InverseDynamicsSolver with an EnergyTank)", entity=self.name)
         super().configure()
         self.declare_stack(self.priorities)
         self._cascade = LexicographicCascade(eps_abs=self.eps_abs, max_iterations=self.max_iterations,

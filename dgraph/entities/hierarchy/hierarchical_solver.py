@@ -51,8 +51,8 @@ class HierarchicalSolver(StackCommands, dg.Entity):
     ``levels()`` lists them).
     Outputs: ``solution`` (:class:`CascadeSolution`), ``velocity`` (nv, the command of a
     velocity-controlled device or an integrator), ``level_residuals`` (one per level of the
-    stack, then the final ``||v||``), ``status``, ``iterations``, ``qp_levels`` (levels that
-    needed ProxQP), ``solve_time`` (s).
+    stack, 0 while a level has no active task, then the final ``||v||``), ``status``,
+    ``iterations``, ``qp_levels`` (levels that needed ProxQP), ``solve_time`` (s).
     """
 
     model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes v)")
@@ -89,19 +89,23 @@ class HierarchicalSolver(StackCommands, dg.Entity):
                                entity=self.name, signal=name)
         return rows
 
-    def _levels(self, t: int) -> list[Level]:
-        levels = []
-        for level in self.read_stack(t):
+    def _levels(self, t: int) -> tuple[list[Level], list[int]]:
+        """The levels with active rows (then the minimum-norm level) and their places in the stack."""
+        levels, places = [], []
+        stack = self.read_stack(t)
+        for place, level in enumerate(stack):
             active = [(name, rows) for name in level if (rows := self._rows(name, t)).active]
             if active:
                 key = tuple((name, len(r.equality_vector), len(r.lower)) for name, r in active)
                 levels.append(stacked_level(key, [r for _, r in active]))
-        return [*levels, self._minimum_norm]
+                places.append(place)
+        return [*levels, self._minimum_norm], [*places, len(stack)]
 
     @dg.output(dtype="object")
     def solution(self, t: int) -> CascadeSolution:
         """The cascade's answer at ``t``."""
-        return self._cascade.solve(self._levels(t), self.nv, t)
+        levels, self._places = self._levels(t)
+        return self._cascade.solve(levels, self.nv, t)
 
     @dg.output(shape=("nv",), depends=("solution",))
     def velocity(self, t: int) -> np.ndarray:
@@ -110,8 +114,12 @@ class HierarchicalSolver(StackCommands, dg.Entity):
 
     @dg.output(shape=None, depends=("solution",))
     def level_residuals(self, t: int) -> np.ndarray:
-        """``sqrt(||A_k v - b_k||^2 + ||s_k||^2)`` per level with rows, then ``||v||``."""
-        return self.solution(t).residuals
+        """``sqrt(||A_k v - b_k||^2 + ||s_k||^2)`` per level of the stack (0 for a level whose
+        tasks are all inactive: it has no rows; an index always names the same level), then ``||v||``."""
+        solution = self.solution(t)
+        residuals = np.zeros(self._places[-1] + 1)
+        residuals[self._places] = solution.residuals
+        return residuals
 
     @dg.output(shape=(), dtype="int", depends=("solution",))
     def status(self, t: int) -> int:

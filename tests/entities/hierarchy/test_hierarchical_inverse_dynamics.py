@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import dgraph as dg
 from dgraph.entities.hierarchy import HierarchicalInverseDynamics
 from dgraph.entities.solvers.inverse_dynamics_qp import NOT_FINITE, SOLVED
 from tests.entities.talos_graph import CONTACTS, TASKS, build
@@ -59,3 +60,8 @@ def test_a_non_finite_task_gives_the_fallback_torque_and_a_status():
     g["com"].reference_position.set(np.array([1e308, 0.0, 0.0]))
     assert solver.status(0) == NOT_FINITE
     np.testing.assert_allclose(solver.tau(0), solver.fallback_torque(g["robot"].state(0)))
+
+
+def test_the_passive_mode_is_refused_rather_than_ignored():
+    with pytest.raises(dg.ParamError, match="no passive mode"):
+        HierarchicalInverseDynamics("hid", passive=True)

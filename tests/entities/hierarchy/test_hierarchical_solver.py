@@ -66,3 +66,15 @@ def test_a_non_finite_task_gives_a_status_and_a_zero_velocity_not_an_exception()
     g["com_xy"].gain.set(100.0)
     g["com_xy_feature"].reference_position.set(reference)
     assert solver.status(0) == SOLVED  # recovers at once
+
+
+def test_level_residuals_keep_one_entry_per_stack_level_while_a_level_is_inactive():
+    g = build()
+    before = g["solver"].level_residuals(0)
+    g["waist"].deactivate()  # the waist is alone on its level
+    g.step()
+    after = g["solver"].level_residuals(g.t)
+    assert len(after) == len(before)
+    waist_level = g["solver"].levels().index(["waist"])
+    assert before[waist_level] > 0.0 and after[waist_level] == 0.0  # no rows while inactive
+    assert (np.delete(after, waist_level)[:-1] > 0.0).all()  # the others keep their places
