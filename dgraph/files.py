@@ -84,8 +84,8 @@ EXTENSION_SCHEMA: dict[str, Any] = {
         "overrides": {"type": "object", "propertyNames": {"pattern": SIGNAL_RE}},
     },
 }
-MAX_EXTENDS = 4
-"""Longest chain of files extending one another (a longer one is taken for a cycle)."""
+MAX_EXTENDS = 8
+"""Longest chain of files extending one another."""
 
 _INT, _FLOAT = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float"
 MAX_NUMBER_CHARS = 64
@@ -219,9 +219,15 @@ def _schema_message(err: jsonschema.ValidationError) -> tuple[str, tuple[Any, ..
 
 
 def read_text(path: str | Path) -> str:
-    """The text of a graph file (:class:`GraphFileError` if unreadable or not UTF-8)."""
+    """The text of a graph file (:class:`GraphFileError` if not a readable regular file of at
+    most ``MAX_BYTES``, or not UTF-8): a device such as ``/dev/zero`` is never read."""
+    path = Path(path)
     try:
-        return Path(path).read_bytes().decode("utf-8")
+        if path.exists() and not path.is_file():
+            raise GraphFileError("cannot read: not a regular file", file=str(path))
+        if path.stat().st_size > MAX_BYTES:
+            raise GraphFileError(f"file larger than {MAX_BYTES} bytes", file=str(path))
+        return path.read_bytes().decode("utf-8")
     except OSError as exc:
         raise GraphFileError(f"cannot read: {exc.strerror or exc}", file=str(path)) from None
     except UnicodeDecodeError as exc:
@@ -252,34 +258,47 @@ def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = 
         raise GraphFileError(f"could not build the graph: {type(exc).__name__}: {exc}", file=file) from exc
 
 
-def _extend(data: dict[str, Any], doc: _Document, overrides: dict[str, Any], depth: int = 1,
-            origins: tuple[tuple[_Document, dict[str, Any]], ...] = ()) -> Graph:
-    """Build the file that ``data`` extends, with its name, duration and overrides (the command
-    line's ``overrides`` win; ``origins``: the overrides of the files extending this one, checked
-    against the final base's entities)."""
-    if depth > MAX_EXTENDS:
-        raise doc.error(f"more than {MAX_EXTENDS} files extend one another (a cycle?)", ("extends",))
-    base_file = Path(doc.file).parent / data["extends"]
-    try:
-        base, base_doc = parse(read_text(base_file), str(base_file))
-    except GraphFileError as exc:
-        raise doc.error(f"cannot extend {data['extends']!r}: {exc}", ("extends",)) from None
+def _extend(data: dict[str, Any], doc: _Document, command_line: dict[str, Any]) -> Graph:
+    """Build the file that ``data`` extends (following a chain of ``extends``), with the name,
+    duration and overrides of the files above it: the nearest file wins, the command line wins
+    over every file. An error in an override is located at the file and line that set it."""
+    from_files: dict[str, tuple[Any, _Document]] = {}
+    seen = {Path(doc.file).resolve()}
+    while "extends" in data:
+        for key, value in data.get("overrides", {}).items():
+            from_files.setdefault(key, (value, doc))
+        base_file = Path(doc.file).parent / data["extends"]
+        if base_file.suffix not in (".yaml", ".yml"):
+            raise doc.error(f"can only extend a .yaml graph file, not {data['extends']!r}", ("extends",))
+        if base_file.resolve() in seen:
+            raise doc.error(f"{data['extends']!r} extends, directly or not, this file (a cycle)", ("extends",))
+        if len(seen) > MAX_EXTENDS:
+            raise doc.error(f"more than {MAX_EXTENDS} files extend one another", ("extends",))
+        seen.add(base_file.resolve())
+        try:
+            base, base_doc = parse(read_text(base_file), str(base_file))
+        except GraphFileError as exc:
+            raise doc.error(f"cannot extend {data['extends']!r}: {exc}", ("extends",)) from None
+        for key in ("name", "duration"):
+            if key in data:
+                base.setdefault(f"_{key}", data[key])  # the nearest file's value
+        data, doc = base, base_doc
     for key in ("name", "duration"):
-        if key in data:
-            base[key] = data[key]
-    own = data.get("overrides", {})
-    origins = (*origins, (doc, own))
-    if "extends" not in base:
-        entities = declared_entities(base)
-        for origin, keys in origins:
-            for key in keys:
-                if key.partition(".")[0] not in entities:
-                    raise origin.error(f"no entity {key.partition('.')[0]!r} in {base_file}", ("overrides", key))
-        return _build(base, base_doc, {**own, **overrides})
-    return _extend(base, base_doc, {**own, **overrides}, depth + 1, origins)
+        if f"_{key}" in data:
+            data[key] = data.pop(f"_{key}")
+    entities = declared_entities(data)
+    for key, (_, origin) in from_files.items():
+        if key.partition(".")[0] not in entities:
+            raise origin.error(f"no entity {key.partition('.')[0]!r} in {doc.file}", ("overrides", key))
+    origins = {key: origin for key, (_, origin) in from_files.items() if key not in command_line}
+    overrides = {**{key: value for key, (value, _) in from_files.items()}, **command_line}
+    return _build(data, doc, overrides, origins)
 
 
-def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> Graph:
+def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any],
+           origins: dict[str, _Document] | None = None) -> Graph:
+    """Build the graph; ``origins`` maps the overrides set by an extending file to that file."""
+    origins = origins or {}
     try:
         graph = Graph(dt=data.get("dt", 0.001), name=data.get("name", Path(doc.file).stem or "graph"))
     except DGraphError as exc:
@@ -294,7 +313,11 @@ def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> G
     param_overrides, constants = _split_overrides(doc, entities, overrides)
     for name, spec in entities.items():
         params = {**_resolve_paths(doc, spec), **param_overrides.get(name, {})}
-        graph.add(_make_entity(doc, name, spec["type"], params, spec.get("_path")))
+        from_file = [key for key in (f"{name}.{p}" for p in param_overrides.get(name, {})) if key in origins]
+        if from_file:  # an extending file changed a parameter: errors point at its override
+            graph.add(_make_entity(origins[from_file[0]], name, spec["type"], params, ("overrides", from_file[0])))
+        else:
+            graph.add(_make_entity(doc, name, spec["type"], params, spec.get("_path")))
     for i, plug in enumerate(data.get("plugs", [])):
         source, target = PLUG_RE.match(plug).groups()
         try:
@@ -307,6 +330,8 @@ def _build(data: dict[str, Any], doc: _Document, overrides: dict[str, Any]) -> G
             raise doc.error(str(refused), ("set", key), refused)
     for key, value in constants.items():
         refused = _set_constant(graph, key, value)
+        if refused and key in origins:
+            raise origins[key].error(str(refused), ("overrides", key), refused)
         if refused:
             raise _override_error(str(refused), key)
     for entity in graph:

@@ -131,6 +131,10 @@ def test_bad_files_give_file_line_and_reason(text, line, fragment, tmp_path):
 def test_unreadable_files(tmp_path):
     with pytest.raises(dg.GraphFileError, match="cannot read"):
         dg.load(tmp_path / "missing.yaml")
+    with pytest.raises(dg.GraphFileError, match="not a regular file"):
+        dg.load("/dev/zero")  # never read (it would never end)
+    with pytest.raises(dg.GraphFileError, match="not a regular file"):
+        dg.load(tmp_path)
     (tmp_path / "latin1.yaml").write_bytes(b"name: caf\xe9\n")
     with pytest.raises(dg.GraphFileError, match="not UTF-8"):
         dg.load(tmp_path / "latin1.yaml")
@@ -295,13 +299,32 @@ def test_a_cycle_of_files_extending_one_another_is_refused(tmp_path):
     write(tmp_path, "b.yaml", "extends: a.yaml\n")
     myself = write(tmp_path, "self.yaml", "extends: self.yaml\n")
     for path in (a, myself):
-        with pytest.raises(dg.GraphFileError, match="extend one another") as info:
+        with pytest.raises(dg.GraphFileError, match="a cycle") as info:
             dg.load(path)
         assert info.value.line == 1
 
 
-def test_the_push_graph_without_tank_is_the_tank_graph_with_the_tank_disabled(monkeypatch):
-    monkeypatch.chdir(ROOT)  # the force profile's path is relative to the repository
+def test_extends_reads_only_yaml_graph_files(tmp_path):
+    for target in ("/etc/hostname", "/dev/zero", "../x.txt"):
+        derived = write(tmp_path, "derived.yaml", f"extends: {target}\n")
+        with pytest.raises(dg.GraphFileError, match="only extend a .yaml graph file") as info:
+            dg.load(derived)
+        assert (info.value.file, info.value.line) == (str(derived), 1)
+
+
+def test_a_bad_override_value_is_located_at_the_extending_file(tmp_path):
+    write(tmp_path, "base.yaml", GOOD)
+    derived = write(tmp_path, "derived.yaml", "extends: base.yaml\noverrides:\n  k.size: -1\n")
+    with pytest.raises(dg.GraphFileError, match="size") as info:
+        dg.load(derived)
+    assert (info.value.file, info.value.line) == (str(derived), 3), str(info.value)
+    derived.write_text("extends: base.yaml\noverrides:\n  k.nope: 1\n")
+    with pytest.raises(dg.GraphFileError, match="nope") as info:
+        dg.load(derived)
+    assert (info.value.file, info.value.line) == (str(derived), 3), str(info.value)
+
+
+def test_the_push_graph_without_tank_is_the_tank_graph_with_the_tank_disabled():
     tank = dg.load(ROOT / "graphs" / "talos_push_tank.yaml")
     no_tank = dg.load(ROOT / "graphs" / "talos_push_no_tank.yaml")
     assert (no_tank.name, tank.name) == ("talos_push_no_tank", "talos_push_tank")

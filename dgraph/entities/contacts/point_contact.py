@@ -41,8 +41,8 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
     Force: ``f`` (3 variables, world axes) is the force the surface exerts on the robot at the
     point; ``n . f`` within ``[min_normal_force, max_normal_force]`` and the inscribed friction
     pyramid (:func:`point_friction`). Cost ``force_weight ||f - f*||^2`` with ``f*`` the input
-    ``force_reference`` (plug a :class:`~dgraph.entities.tasks.ForceTask`'s ``force``; its
-    default 0 makes it a regularisation).
+    ``force_reference`` (plug a :class:`~dgraph.entities.tasks.ForceTask`'s ``force``); left
+    unplugged and unset, the contact has no force reference: ``||f||^2`` regularises it.
 
     Parameters: ``frame`` (the point: a frame of the plugged model, e.g. a tool tip added with
     RobotModel's ``tool_frames``), ``normal`` (3, world, pointing from the surface into the
@@ -100,7 +100,13 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
         rhs = -kp * error - kd * velocity - state.frame_drift(frame, WORLD)[:3]
         return ContactConstraint(self.name, bool(self.active(t)), state.frame_jacobian(frame, WORLD)[:3], rhs,
                                  self._generator, self._friction, self._lower, self._upper, self.force_weight,
-                                 np.eye(3), error, self.force_reference(t))
+                                 np.eye(3), error, self._force_reference(t))
+
+    def _force_reference(self, t: int) -> np.ndarray | None:
+        """``f*``, or None when nothing sets it (a plain contact: its force is regularised to 0
+        and, for an energy tank, is an environment force, not a force task)."""
+        inp = self.force_reference
+        return inp(t) if inp.source is not None or inp.is_set else None
 
     @dg.output(shape=(3,), depends=("contact",))
     def error(self, t: int) -> np.ndarray:

@@ -18,7 +18,7 @@ from dgraph.entities.energy.power import (
     task_space_inertia,
     uncontrollable_power,
 )
-from dgraph.entities.energy.valves import TankLimits, Valves, valves
+from dgraph.entities.energy.valves import TankLimits, Valves, overflow_valve, valves
 from dgraph.entities.robot.robot_state import RobotState, unactuated_dofs
 from dgraph.entities.solvers.inverse_dynamics_qp import Passivity
 from dgraph.entities.tasks.equation import TaskEquation
@@ -45,13 +45,16 @@ class TankStage:
 def task_block(equation: TaskEquation, velocity: np.ndarray) -> TaskBlock:
     """The tank's view of a task. A rate feature (angular momentum, ``k_dot = k_dot* - K (k - k*)``)
     has no position error: its error is ``E_dot`` with ``K_D = K`` and ``K_P = 0`` (so ``S = 0``)."""
-    f = equation.feature
+    f, kp, kd = equation.feature, equation.kp, equation.kd
+    weighted = equation.weight > 0.0
+    if not weighted.all():  # rows the QP ignores carry no controlled energy
+        rows = np.flatnonzero(weighted)
+        f, kp, kd = f.select(rows), kp[rows], kd[rows]
     x_dot = f.jacobian @ velocity
     if f.is_rate:
         zeros = np.zeros_like(f.error)
-        return TaskBlock(zeros, f.error, x_dot, f.reference_acceleration, f.drift, zeros, equation.kp, f.jacobian)
-    return TaskBlock(f.error, f.error_velocity, x_dot, f.reference_acceleration, f.drift, equation.kp,
-                     equation.kd, f.jacobian)
+        return TaskBlock(zeros, f.error, x_dot, f.reference_acceleration, f.drift, zeros, kp, f.jacobian)
+    return TaskBlock(f.error, f.error_velocity, x_dot, f.reference_acceleration, f.drift, kp, kd, f.jacobian)
 
 
 @dg.register
@@ -76,16 +79,20 @@ class EnergyTank(dg.Entity):
 
     After the solve (the tick's state transition) the tank is integrated from the power the
     controller actually delivered, ``-v_j^T tau`` with the solver's ``tau`` (fallback included):
-    ``E(t+1) = E(t) + dt (1 - alpha') (-v_j^T tau - beta gamma S_dot)``, where ``alpha' = alpha``
-    only while that flow fills the tank (so ``H_dot <= -v_j^T tau`` holds for the bookkeeping,
-    Eq. 5.27). The energy is stored as ``E = s^2 / 2`` and nothing divides by ``s``. With
-    ``clamp`` the energy is kept in ``[E_min, E_max]`` and what the clamp adds or removes is
-    summed in ``correction`` (it is not passive, so it is shown, not hidden).
+    ``E(t+1) = E(t) + dt (1 - alpha') (-v_j^T tau - beta gamma S_dot)``, where ``alpha'`` is the
+    overflow valve (Eq. 5.23) of that actual flow, non-zero only while it fills the tank and
+    large enough that one tick never passes ``E_max`` (so ``beta gamma S_dot + E_dot <= -v_j^T
+    tau``, Eq. 5.27, with ``beta gamma`` held over the tick, and ``E <= E_max`` without a
+    clamp). The energy is stored as ``E = s^2 / 2`` and nothing divides by ``s``. Below, only
+    the uncontrollable power can drain the tank once ``beta = 0``: with ``clamp`` the energy is
+    kept at ``E_min`` and what the clamp adds is summed in ``correction`` (it is not passive,
+    so it is shown, not hidden).
 
     A task whose weights are all zero is out of the stack (its ``Lambda K_P`` history is dropped;
-    re-adding it starts with ``P_dot = 0``); inactive contacts are ignored. With
-    ``enabled: false`` everything is computed and integrated (without clamp) for the record, but
-    the solver gets scale 1 and no bound: the plain QP.
+    re-adding it starts with ``P_dot = 0``), and so are the rows of a task whose weight is 0;
+    inactive contacts are ignored. With ``enabled: false`` everything is computed for the
+    record, but the solver gets scale 1 and no bound (the plain QP) and the energy is integrated
+    as that QP ran, ``E_dot = -v_j^T tau - S_dot``, without valves or clamp.
 
     Parameters: ``tasks``, ``contacts`` (input names), ``maximum_energy`` (5 J),
     ``minimum_energy`` (0.1 J), ``initial_energy`` (3 J, the pushing scenario), ``power_low``
@@ -107,7 +114,7 @@ class EnergyTank(dg.Entity):
     maximum_energy = dg.Param(5.0, kind="float", minimum=0.0, doc="E_max (J)")
     minimum_energy = dg.Param(0.1, kind="float", minimum=0.0, doc="E_min (J)")
     initial_energy = dg.Param(3.0, kind="float", minimum=0.0, doc="E(0) (J)")
-    power_low = dg.Param(-0.5, kind="float", maximum=0.0, doc="P_low (W, <= 0): the tasks' largest draw")
+    power_low = dg.Param(-0.5, kind="float", maximum=0.0, doc="P_low (W, < 0): the tasks' largest draw")
     band = dg.Param(0.1, kind="float", minimum=0.0, doc="smoothing band of beta and alpha (J; 0: hard)")
     inertia = dg.Param("per_task", kind="str", choices=("per_task", "stacked"), doc="Lambda per task or stacked")
     enabled = dg.Param(True, kind="bool", doc="false: compute and record, but leave the solver plain")
@@ -127,6 +134,9 @@ class EnergyTank(dg.Entity):
             raise dg.ParamError(f"{self.name}: minimum_energy must be below maximum_energy", entity=self.name)
         if not self.minimum_energy <= self.initial_energy <= self.maximum_energy:
             raise dg.ParamError(f"{self.name}: initial_energy must be in [minimum_energy, maximum_energy]",
+                                entity=self.name)
+        if not self.power_low < 0.0:
+            raise dg.ParamError(f"{self.name}: power_low must be < 0 W (0 would stop every task that draws power)",
                                 entity=self.name)
         if self.band > self.maximum_energy - self.minimum_energy:
             raise dg.ParamError(f"{self.name}: band is wider than [minimum_energy, maximum_energy]", entity=self.name)
@@ -269,11 +279,18 @@ class EnergyTank(dg.Entity):
 
     # -- integration after the solve ----------------------------------------------------------
     def prepare_state(self, t: int) -> None:
-        """Integrate the tank from the delivered power; keep ``Lambda K_P`` and the contact wrenches."""
+        """Integrate the tank from the delivered power; keep ``Lambda K_P`` and the contact wrenches.
+
+        The overflow valve is evaluated again on the actual flow (the QP row bounds it from below
+        only, so a tank that planned to drain may fill). A disabled tank's QP ran with scale 1 and
+        no valve: its bookkeeping uses the same, ``E_dot = -v_j^T tau - S_dot``."""
         stage = self.stage(t)
-        flow = self.delivered_power(t) - stage.scale * stage.storage_rate
-        alpha = stage.valves.alpha if flow > 0.0 else 0.0
-        energy = float(self.energy(t)) + self.dt * (1.0 - alpha) * flow
+        energy = float(self.energy(t))
+        if self.enabled:
+            flow = self.delivered_power(t) - stage.scale * stage.storage_rate
+            energy += self.dt * (1.0 - self._overflow(energy, flow)) * flow
+        else:
+            energy += self.dt * (self.delivered_power(t) - stage.storage_rate)
         if not math.isfinite(energy):
             raise dg.ComputeError(f"{self.name}: tank energy is not finite at tick {t} (delivered power "
                                   f"{self.delivered_power(t)}, S_dot {stage.storage_rate})", entity=self.name,
@@ -286,6 +303,15 @@ class EnergyTank(dg.Entity):
         self.contact_wrenches.stage({c.name: c.force_generator @ f for c, f in
                                      zip(solution.contacts, solution.forces, strict=True)
                                      if c.force_reference is None})
+
+    def _overflow(self, energy: float, flow: float) -> float:
+        """``alpha'``: the overflow valve of the actual flow, which also rejects the part of one
+        tick's inflow that would pass ``E_max`` (the discrete form of ``alpha = 1`` at ``E_max``;
+        rejecting inflow is passive, so no clamp is needed at the top)."""
+        if flow <= 0.0:
+            return 0.0
+        headroom = max(self.maximum_energy - energy, 0.0) / (self.dt * flow)
+        return min(1.0, max(overflow_valve(energy, True, self.limits), 1.0 - headroom))
 
     def commit_state(self, t_next: int) -> None:
         """Publish the new energy, correction and histories."""

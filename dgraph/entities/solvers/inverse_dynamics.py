@@ -9,7 +9,13 @@ import numpy as np
 import dgraph as dg
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model, unactuated_dofs
-from dgraph.entities.solvers.inverse_dynamics_qp import SOLVED, InverseDynamicsQP, Passivity, QPSolution
+from dgraph.entities.solvers.inverse_dynamics_qp import (
+    POWER_TOLERANCE,
+    SOLVED,
+    InverseDynamicsQP,
+    Passivity,
+    QPSolution,
+)
 from dgraph.entities.tasks.equation import TaskEquation
 
 
@@ -32,9 +38,10 @@ class InverseDynamicsSolver(dg.Entity):
     :class:`~dgraph.entities.energy.EnergyTank`'s ``passivity``) scales every task vector and
     force reference by ``beta gamma`` and adds the row ``-v_j^T tau >= H_dot``. A tank that is
     disabled hands over scale 1 and no bound: the QP is then the plain one, bit for bit. When
-    the passive QP fails, it is solved again without the passivity row (``passivity_relaxed``
-    is true for that tick: the tank, integrated from the delivered power, pays for it), and
-    only if that fails too does the fallback act.
+    no torque within the limits can deliver the bound (``H_dot > sum |v_j| tau_max``), or the
+    passive QP fails, it is solved without the passivity row (``passivity_relaxed`` is true for
+    that tick: the tank, integrated from the delivered power, pays for it), and only if that
+    fails too does the fallback act.
 
     Parameters: ``model`` (sizes the ports; the same robot as the RobotModel), ``tasks`` and
     ``contacts`` (names of the inputs to declare, usually the names of the task and contact
@@ -125,6 +132,14 @@ class InverseDynamicsSolver(dg.Entity):
         if problem is not None:
             raise dg.SpecError(f"{self.name}.{name} at tick {t}: {problem}", entity=self.name, signal=name)
 
+    def _reachable(self, passivity: Passivity) -> bool:
+        """Whether some torque within the limits delivers ``-v_j^T tau >= H_dot`` (at most
+        ``sum |v_j| tau_max``; a necessary condition, to within ``POWER_TOLERANCE``)."""
+        if passivity.power_bound is None:
+            return True
+        largest = float(np.abs(passivity.velocity[self.n_unactuated:]) @ self._qp.effort_limit)
+        return passivity.power_bound <= largest + POWER_TOLERANCE
+
     def fallback_torque(self, state: RobotState) -> np.ndarray:
         """``g_j(q) - d v_j``, clipped to the torque limits."""
         nu = self.n_unactuated
@@ -139,11 +154,15 @@ class InverseDynamicsSolver(dg.Entity):
         active = [row for row, contact in enumerate(contacts) if contact.active]
         passivity = self._value(self.passivity, Passivity, t) if self.passive else None
         active_contacts = [contacts[r] for r in active]
+        relax = passivity is not None and not self._reachable(passivity)
+        if relax:  # no torque within the limits delivers the bound: ProxQP would only run to its limit
+            passivity = Passivity(passivity.scale, None, passivity.velocity)
         solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, active_contacts, t, passivity)
         if solution.status != SOLVED and passivity is not None and passivity.power_bound is not None:
+            relax = True
             relaxed = Passivity(passivity.scale, None, passivity.velocity)
             solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, active_contacts, t, relaxed)
-            solution.passivity_relaxed = True
+        solution.passivity_relaxed = relax
         solution.contact_rows = active
         if solution.status != SOLVED:
             solution.tau = self.fallback_torque(state)

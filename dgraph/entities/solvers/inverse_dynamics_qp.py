@@ -37,6 +37,8 @@ from dgraph.entities.tasks.equation import TaskEquation
 
 INFINITY = 1e20
 """ProxQP's bound for 'no bound'."""
+POWER_TOLERANCE = 1e-9
+"""W: a passivity bound this close to what the velocity allows counts as met (rounding noise)."""
 
 SOLVED, MAX_ITERATIONS, PRIMAL_INFEASIBLE, DUAL_INFEASIBLE, NOT_FINITE, NOT_SOLVED = range(6)
 STATUS_NAMES = ("solved", "max_iterations", "primal_infeasible", "dual_infeasible", "not_finite", "not_solved")
@@ -206,7 +208,8 @@ class InverseDynamicsQP:
     def _write_passivity_row(self, ws: _Workspace, passivity: Passivity, bias_forces: np.ndarray) -> None:
         """``-v_j^T tau >= H_dot`` with ``tau = (torque rows) x + h_j``, divided by the row's norm
         (the preconditioner is kept from the first solve: a row whose scale follows ``|v|`` would
-        drift out of it). A zero row (``v = 0``) with ``H_dot <= 0`` holds for every ``x``."""
+        drift out of it). A zero row (``v ~ 0``) holds for every ``x`` up to rounding and is
+        dropped (a bound out of reach is caught before by the entity)."""
         velocity = passivity.velocity[self.nu:]
         row = -velocity @ ws.C[-self.na:]
         bound = passivity.power_bound + velocity @ bias_forces[self.nu:]
@@ -214,9 +217,9 @@ class InverseDynamicsQP:
         if norm > 1e-12:
             ws.C[-self.na - 1] = row / norm
             ws.lower[-self.na - 1] = bound / norm
-        else:
+        else:  # v ~ 0: -v_j^T tau ~ 0 for every tau, and H_dot is rounding noise (the entity relaxes larger ones)
             ws.C[-self.na - 1] = 0.0
-            ws.lower[-self.na - 1] = -INFINITY if bound <= 0.0 else INFINITY
+            ws.lower[-self.na - 1] = -INFINITY
         ws.upper[-self.na - 1] = INFINITY
 
     def _write_force_references(self, ws: _Workspace, contacts: list[ContactConstraint], scale: float) -> None:

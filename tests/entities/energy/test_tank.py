@@ -1,6 +1,7 @@
 """EnergyTank on TALOS and on a fixed-base arm: the passive QP row, bit-identical disabled mode,
 tank bookkeeping, task removal, error paths (thesis Ch. 5, notes §7)."""
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -110,6 +111,13 @@ def test_zero_scale_zeroes_every_task_vector_and_force_reference():
     assert ws.upper[-qp.na - 1] == INFINITY and np.abs(ws.g).max() > 1e-3
     ws = qp.assemble(state.mass_matrix, state.bias_forces, tasks, contacts, Passivity(0.0, None, state.v))
     assert not ws.g.any()
+    # a contact with a force reference (a force task): its reference is scaled too
+    pushing = dataclasses.replace(contacts[0], name="pushing", force_reference=np.full(12, 5.0))
+    for scale in (1.0, 0.5, 0.0):
+        ws = qp.assemble(state.mass_matrix, state.bias_forces, tasks, [pushing, contacts[1]],
+                         Passivity(scale, None, state.v))
+        forces = slice(qp.nv, qp.nv + 12)
+        np.testing.assert_allclose(ws.g[forces], -2.0 * pushing.force_weight * scale * 5.0)
 
 
 def test_tank_bookkeeping_adds_up_and_stays_in_its_bounds():
@@ -120,11 +128,62 @@ def test_tank_bookkeeping_adds_up_and_stays_in_its_bounds():
     energy = rows[0]["tank.energy"]
     for row, after in itertools.pairwise(rows):
         flow = row["tank.delivered_power"] - row["tank.beta"] * row["tank.gamma"] * row["tank.storage_rate"]
-        alpha = row["tank.alpha"] if flow > 0 else 0.0
+        alpha = g["tank"]._overflow(row["tank.energy"], flow)  # the valve of the actual flow
         energy += 0.001 * (1 - alpha) * flow + (after["tank.correction"] - row["tank.correction"])
         assert after["tank.energy"] == pytest.approx(energy, abs=1e-12)
         assert 0.1 <= after["tank.energy"] <= 5.0
     assert max(r["tank.alpha"] for r in rows) > 0.0  # the overflow valve acted near E_max
+
+
+def test_the_overflow_valve_keeps_the_energy_under_its_maximum_without_the_clamp():
+    """The QP row bounds the delivered power from below only: a tank that planned to drain may
+    fill, so the valve must act on the actual flow (Eq. 5.23), not the planned one."""
+    g = passive_graph(initial_energy=4.95, clamp=False)
+    rows = run(g, moving_states(300, seed=4, speed=2.0), ("tank.energy", "tank.correction"))
+    energies = [r["tank.energy"] for r in rows]
+    assert max(energies) <= 5.0 + 1e-9 and rows[-1]["tank.correction"] == 0.0
+    assert max(energies) > 4.99  # it did press against E_max
+
+
+def test_a_disabled_tank_integrates_what_the_plain_qp_delivered():
+    g = passive_graph(enabled=False)
+    rows = run(g, moving_states(60, seed=10, speed=2.0), ("tank.energy", "tank.delivered_power",
+                                                           "tank.storage_rate", "tank.correction"))
+    for row, after in itertools.pairwise(rows):
+        expected = row["tank.energy"] + 0.001 * (row["tank.delivered_power"] - row["tank.storage_rate"])
+        assert after["tank.energy"] == pytest.approx(expected, abs=1e-12)
+    assert rows[-1]["tank.correction"] == 0.0
+
+
+def test_an_angular_momentum_task_stores_no_energy_but_its_damping_power_counts():
+    from dgraph.entities.energy.tank import task_block
+    from dgraph.entities.features import AngularMomentum
+
+    g = passive_graph()
+    momentum = g.add(AngularMomentum("momentum"))
+    task = g.add(Task("momentum_task"))
+    task.kp.set(10.0)
+    g.plug("robot.state", "momentum.robot")
+    g.plug("momentum.feature", "momentum_task.feature")
+    q, v = list(moving_states(10, seed=11))[-1]
+    g["robot"].q.set(q)
+    g["robot"].v.set(v)
+    block = task_block(task.equation(0), v)
+    assert not block.error.any() and not block.kp.any()
+    np.testing.assert_array_equal(block.error_velocity, momentum.error(0))  # k - k*
+    np.testing.assert_array_equal(block.kd, np.full(3, 10.0))
+
+
+def test_rows_with_zero_weight_are_left_out_of_the_storage():
+    from dgraph.entities.energy.tank import task_block
+
+    g = passive_graph()
+    q, v = list(moving_states(10, seed=12))[-1]
+    g["robot"].q.set(q)
+    g["robot"].v.set(v)
+    g["posture_task"].weight.set(np.r_[np.zeros(12), np.full(20, 0.1)])  # legs out
+    block = task_block(g["posture_task"].equation(0), v)
+    assert len(block.error) == 20 and block.jacobian.shape == (20, 38)
 
 
 def test_an_empty_tank_gives_no_nan():
@@ -153,7 +212,7 @@ def test_removing_a_task_drops_its_history_and_re_adding_it_starts_without_a_rat
     assert abs(stage.storage_rate) < 1e3
 
 
-def test_stacked_inertia_runs_and_agrees_in_sign():
+def test_stacked_inertia_keeps_the_passivity_row():
     g = passive_graph(inertia="stacked")
     rows = run(g, moving_states(40, seed=7), ("tank.storage", "tank.power_bound", "tank.delivered_power",
                                               "solver.status"))
@@ -191,6 +250,7 @@ def test_fixed_base_arm():
         if solution.passivity_relaxed:  # only when no torque within the limits can meet the bound
             relaxed += 1
             assert tank.power_bound(g.t) > np.abs(v) @ model.effortLimit
+            assert solution.iterations < 100  # recognised up front, not by running ProxQP to its limit
         else:
             assert tank.power_bound(g.t) <= -v @ solution.tau + 1e-6
         assert tank.delivered_power(g.t) == pytest.approx(-v @ solution.tau)
@@ -203,6 +263,8 @@ def test_tank_errors_name_the_entity_and_input():
         EnergyTank("tank", minimum_energy=5.0, maximum_energy=1.0)
     with pytest.raises(dg.ParamError, match="initial_energy"):
         EnergyTank("tank", initial_energy=9.0)
+    with pytest.raises(dg.ParamError, match="power_low must be < 0"):
+        EnergyTank("tank", power_low=0.0)
     with pytest.raises(dg.ParamError, match="'robot' cannot name an input"):
         EnergyTank("tank", tasks=["robot"])
     g = passive_graph()
