@@ -91,8 +91,9 @@ class EnergyTank(dg.Entity):
     A task whose weights are all zero is out of the stack (its ``Lambda K_P`` history is dropped;
     re-adding it starts with ``P_dot = 0``), and so are the rows of a task whose weight is 0;
     inactive contacts are ignored. With ``enabled: false`` everything is computed for the
-    record, but the solver gets scale 1 and no bound (the plain QP) and the energy is integrated
-    as that QP ran, ``E_dot = -v_j^T tau - S_dot``, without valves or clamp.
+    record, but the solver gets scale 1 and no bound (the plain QP), and the energy is integrated
+    as that QP ran (``beta gamma = 1``), up to the same ``E_max`` but with no floor and no
+    clamp: how far below zero it goes is what the plain controller overdrew.
 
     Parameters: ``tasks``, ``contacts`` (input names), ``maximum_energy`` (5 J),
     ``minimum_energy`` (0.1 J), ``initial_energy`` (3 J, the pushing scenario), ``power_low``
@@ -282,15 +283,12 @@ class EnergyTank(dg.Entity):
         """Integrate the tank from the delivered power; keep ``Lambda K_P`` and the contact wrenches.
 
         The overflow valve is evaluated again on the actual flow (the QP row bounds it from below
-        only, so a tank that planned to drain may fill). A disabled tank's QP ran with scale 1 and
-        no valve: its bookkeeping uses the same, ``E_dot = -v_j^T tau - S_dot``."""
+        only, so a tank that planned to drain may fill). A disabled tank's QP ran with scale 1:
+        its bookkeeping uses scale 1 too, with the same capacity ``E_max`` and no floor."""
         stage = self.stage(t)
         energy = float(self.energy(t))
-        if self.enabled:
-            flow = self.delivered_power(t) - stage.scale * stage.storage_rate
-            energy += self.dt * (1.0 - self._overflow(energy, flow)) * flow
-        else:
-            energy += self.dt * (self.delivered_power(t) - stage.storage_rate)
+        flow = self.delivered_power(t) - (stage.scale if self.enabled else 1.0) * stage.storage_rate
+        energy += self.dt * (1.0 - self._overflow(energy, flow)) * flow
         if not math.isfinite(energy):
             raise dg.ComputeError(f"{self.name}: tank energy is not finite at tick {t} (delivered power "
                                   f"{self.delivered_power(t)}, S_dot {stage.storage_rate})", entity=self.name,
