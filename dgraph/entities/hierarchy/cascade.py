@@ -28,8 +28,12 @@ Both ``r_k* = A_k x* - b_k`` and ``s_k*`` are unique (the cost is strictly conve
 Each level is first solved in closed form, ``z = (A_k Z)^+ (b_k - A_k x_{k-1})`` (the
 minimum-norm least-squares step, from the same QR). When that point satisfies every kept
 inequality and the level's own, it is optimal (the cost cannot be lower than the
-unconstrained least squares with zero slack). Otherwise the level is a ProxQP problem in
-``(z, s)``, with no equality row:
+unconstrained least squares with zero slack). Otherwise a closed-form active set is tried
+(:meth:`LexicographicCascade._active_set`: the violated rows pinned within the optimal set of
+the least squares, then a primal active set with a sign check of the multipliers; exact, at
+most ``active_set_iterations`` working sets): a joint on its limit that a lower level pushes
+against needs no QP. When that fails (an own row needing slack, cycling), the level is a
+ProxQP problem in ``(z, s)``, with no equality row:
 
 ```
 min  ||A_k Z z - (b_k - A_k x_{k-1})||^2 + ||s||^2
@@ -130,6 +134,7 @@ class _Kept:
     matrices: list[np.ndarray] = field(default_factory=list)
     lower: list[np.ndarray] = field(default_factory=list)
     upper: list[np.ndarray] = field(default_factory=list)
+    cache: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # stacked(), until the next add
 
     def add(self, level: Level, x: np.ndarray, tolerance: float) -> np.ndarray | None:
         """Keep ``level``'s inequalities that hold at its optimum ``x`` (within ``tolerance``;
@@ -139,6 +144,7 @@ class _Kept:
         values = level.inequality_matrix @ x
         violated = (values < level.lower - tolerance) | (values > level.upper + tolerance)
         holding = ~violated
+        self.cache = None
         self.matrices.append(level.inequality_matrix[holding])
         self.lower.append(np.minimum(level.lower[holding], values[holding]))
         self.upper.append(np.maximum(level.upper[holding], values[holding]))
@@ -154,9 +160,10 @@ class _Kept:
 
     def stacked(self, columns: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """All kept rows as one ``(C, l, u)``."""
-        if not self.matrices:
-            return np.zeros((0, columns)), np.zeros(0), np.zeros(0)
-        return np.vstack(self.matrices), np.concatenate(self.lower), np.concatenate(self.upper)
+        if self.cache is None:
+            self.cache = ((np.vstack(self.matrices), np.concatenate(self.lower), np.concatenate(self.upper))
+                          if self.matrices else (np.zeros((0, columns)), np.zeros(0), np.zeros(0)))
+        return self.cache
 
 
 def _holds(level: Level, x: np.ndarray, tolerance: float) -> bool:
@@ -187,12 +194,15 @@ class LexicographicCascade:
     violate an inequality and still be accepted; ``pin_tolerance``: the violation above which
     a row counts as violated at its level's optimum and is pinned (below it, a row at its bound
     could be a ProxQP rounding of an active row, which must not be pinned); ``closed_form`` false sends every level with
-    rows to ProxQP (for tests and benchmarks).
+    rows to ProxQP (for tests and benchmarks); ``active_set_iterations``: the closed-form active
+    set's limit of pinning rounds and of working sets before ProxQP takes the level.
     """
 
     def __init__(self, *, eps_abs: float = 1e-8, max_iterations: int = 1000, rank_tolerance: float = 1e-9,
-                 feasibility_tolerance: float = 1e-9, pin_tolerance: float = 1e-6, closed_form: bool = True):
+                 feasibility_tolerance: float = 1e-9, pin_tolerance: float = 1e-6, closed_form: bool = True,
+                 active_set_iterations: int = 20):
         self.eps_abs, self.max_iterations = eps_abs, max_iterations
+        self.active_set_iterations = active_set_iterations
         self.pin_tolerance = pin_tolerance
         self.rank_tolerance, self.feasibility_tolerance = rank_tolerance, feasibility_tolerance
         self.closed_form = closed_form
@@ -217,8 +227,10 @@ class LexicographicCascade:
             equalities = level.equality_matrix
             step, free = self._least_squares(equalities, level.equality_vector - equalities @ x, basis)
             candidate = x + step
-            if not (self.closed_form and _holds(level, candidate, self.feasibility_tolerance)
-                    and kept.hold(candidate, self.feasibility_tolerance)):
+            if self.closed_form and not (_holds(level, candidate, self.feasibility_tolerance)
+                                         and kept.hold(candidate, self.feasibility_tolerance)):
+                candidate = self._active_set(level, x, basis, candidate, free, kept)
+            if candidate is None or not self.closed_form:
                 key = (tuple(lv.key for lv in levels[:index + 1]), basis.shape[1])
                 status, its, candidate = self._solve_qp(key, level, x, basis, kept, tick)
                 iterations, qp_levels = iterations + its, qp_levels + 1
@@ -257,6 +269,144 @@ class LexicographicCascade:
             y = lapack.dgels(np.triu(qr[:rank]).T, permuted)[1][:rank]
         return rotated[:, :rank] @ y, rotated[:, rank:]
 
+    def _min_norm(self, matrix: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """``argmin ||M y - t||`` of least norm (LAPACK ``dgelsy``: one complete orthogonal
+        factorisation; for the steps that need no null-space basis)."""
+        m, n = matrix.shape
+        if not m or not n:
+            return np.zeros(n)
+        rhs = np.zeros((max(m, n), 1))
+        rhs[:m, 0] = target
+        small = min(m, n)
+        _, y, _, _, _ = lapack.dgelsy(matrix, rhs, np.zeros(n, dtype=np.int32), self.rank_tolerance,
+                                      max(small + 3 * n + 1, 2 * small + 1) + 64 * n)
+        return y[:n, 0]
+
+    def _pinned(self, matrix: np.ndarray, gap: np.ndarray, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """As :meth:`_least_squares` (the step meeting ``matrix step = gap`` in ``basis`` and the
+        basis left), with one row by a Householder reflection of ``Z^T c``."""
+        if len(gap) != 1:
+            return self._least_squares(matrix, gap, basis)
+        direction = basis.T @ matrix[0]
+        norm = math.sqrt(float(direction @ direction))
+        if norm <= self.rank_tolerance * max(1.0, float(np.abs(direction).max(initial=0.0))):
+            return np.zeros(len(matrix[0])), basis
+        step = basis @ (direction * (gap[0] / norm**2))
+        direction[0] += math.copysign(norm, direction[0])  # H = I - 2 u u^T maps Z^T c onto e_0
+        direction /= math.sqrt(float(direction @ direction))
+        return step, (basis - 2.0 * np.outer(basis @ direction, direction))[:, 1:]
+
+    def _movable(self, matrix: np.ndarray, basis: np.ndarray) -> np.ndarray:
+        """Which rows ``basis`` can still move (``C Z != 0``; the others are fixed above and hold
+        at ``x`` up to the tolerances of the levels between)."""
+        return np.abs(matrix @ basis).max(axis=1, initial=0.0) > self.rank_tolerance * max(
+            1.0, float(np.abs(matrix).max(initial=0.0)))
+
+    def _active_set(self, level: Level, x: np.ndarray, basis: np.ndarray, candidate: np.ndarray, free: np.ndarray,
+                    kept: _Kept) -> np.ndarray | None:
+        """The level in closed form when its least-squares step ``candidate`` violates a row
+        (kept or its own); ``None`` sends it to ProxQP. Two exact stages:
+
+        1. the optimal set of the unconstrained least squares is ``candidate + range(free)``: the
+           violated rows are pinned at their violated bound and the minimum-norm move in ``free``
+           that meets them is taken (at most ``active_set_iterations`` rounds, each pinning the
+           rows still violated). A point of that set meeting every row is optimal: its cost is the
+           unconstrained minimum and its slack zero. This is the case of a bound that is active by
+           construction (a joint on its limit that the tasks need not move: TALOS's grippers).
+        2. otherwise a primal active set (Nocedal & Wright, Alg. 16.3) on the level with its own
+           rows as hard constraints, from ``x`` (feasible for the kept rows): each working set is
+           an equality-constrained least squares solved by elimination (the same pivoted QR), the
+           step is cut at the first blocking row, which joins the working set; at a working-set
+           optimum the multipliers (least squares on ``Z^T C_W^T lambda = -Z^T grad``) must have
+           the sign of their bound, else the most wrong row leaves. It ends at a KKT point (the
+           cost is convex) or after ``active_set_iterations`` working sets (degenerate cycling),
+           then ProxQP. Its answer is the level's optimum only when its own rows need no slack:
+           an own row with a nonzero multiplier, or an own row violated at ``x``, means ProxQP.
+        """
+        rows, lower, upper = kept.stacked(len(x))
+        m_kept = len(lower)
+        if len(level.lower):
+            rows, lower = np.vstack([rows, level.inequality_matrix]), np.concatenate([lower, level.lower])
+            upper = np.concatenate([upper, level.upper])
+        tolerance, rounds = self.feasibility_tolerance, self.active_set_iterations
+        bounds = np.zeros(len(lower))
+        pinned = np.zeros(len(lower), dtype=bool)
+        point = candidate
+        for _ in range(rounds if free.shape[1] else 1):  # stage 1
+            values = rows @ point
+            below, above = values < lower - tolerance, values > upper + tolerance
+            newly = below | above
+            if not newly.any():
+                return point
+            newly &= ~pinned
+            if not newly.any():
+                break
+            bounds[newly] = np.where(above[newly], upper[newly], lower[newly])
+            pinned |= newly
+            if not free.shape[1]:
+                break
+            matrix = rows[pinned]
+            gap = bounds[pinned] - matrix @ candidate
+            if len(gap) == 1:  # the usual case: one bound, w = N^T c d / |N^T c|^2
+                direction = matrix[0] @ free
+                square = float(direction @ direction)
+                if square <= (self.rank_tolerance * max(1.0, float(np.abs(matrix).max()))) ** 2:
+                    break  # the optimal set cannot move that row
+                point = candidate + free @ (direction * (gap[0] / square))
+            else:
+                point = candidate + free @ self._min_norm(matrix @ free, gap)
+        movable = np.ones(len(lower), dtype=bool)  # stage 2, on the rows that z can move
+        movable[:m_kept] = self._movable(rows[:m_kept], basis)
+        rows, lower, upper, bounds = rows[movable], lower[movable], upper[movable], bounds[movable]
+        m_kept = int(np.count_nonzero(movable[:m_kept]))
+        values = rows @ x
+        if (values < lower - tolerance).any() or (values > upper + tolerance).any():
+            return None
+        matrix, target = level.equality_matrix, level.equality_vector
+        working: list[int] = []
+        point, optimum = x, candidate
+        for _ in range(rounds):
+            if working:
+                active = np.array(working)
+                shift, reduced = self._pinned(rows[active], bounds[active] - rows[active] @ point, basis)
+                optimum = point + shift
+                optimum = optimum + reduced @ self._min_norm(matrix @ reduced, target - matrix @ optimum)
+            else:  # any minimiser of the unconstrained least squares will do
+                optimum = candidate
+            before, after = rows @ point, rows @ optimum
+            outside = (after < lower - tolerance) | (after > upper + tolerance)
+            outside[working] = False
+            if outside.any():
+                index = np.flatnonzero(outside)
+                bound = np.where(after[index] > upper[index], upper[index], lower[index])
+                change = after[index] - before[index]
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    fraction = np.where(change != 0.0, (bound - before[index]) / change, 0.0)
+                j = int(np.argmin(np.clip(fraction, 0.0, 1.0)))
+                point = point + min(max(fraction[j], 0.0), 1.0) * (optimum - point)
+                working.append(int(index[j]))
+                bounds[index[j]] = bound[j]
+                continue
+            point = optimum
+            if not working:
+                return point
+            active = np.array(working)
+            gradient = basis.T @ (matrix.T @ (matrix @ point - target))
+            normals = basis.T @ rows[active].T
+            if len(active) == 1:
+                multipliers = -(normals[:, 0] @ gradient) / (normals[:, 0] @ normals[:, 0]) * np.ones(1)
+            else:
+                multipliers = self._min_norm(normals, -gradient)
+            sign = np.where(bounds[active] == upper[active], 1.0, -1.0)  # >= 0 at an upper bound
+            signed = np.where(lower[active] == upper[active], np.inf, sign * multipliers)
+            small = 1e-9 * max(1.0, float(np.abs(multipliers).max()))
+            if signed.min() >= -small:
+                if (np.abs(multipliers[active >= m_kept]) > small).any():
+                    return None  # an own row pushes back: the optimum may need slack there
+                return point
+            working.pop(int(np.argmin(signed)))
+        return None
+
     def _workspace(self, key: Hashable, n_qp: int, n_in: int, free: int) -> _Workspace:
         ws = self._workspaces.get(key)
         if ws is None:
@@ -283,8 +433,7 @@ class LexicographicCascade:
         kept_matrix, kept_lower, kept_upper = kept.stacked(len(x))
         # a kept row that z cannot move (C Z = 0: its directions are fixed above) holds at z = 0 and
         # stays out: rows of 1e-16 wreck ProxQP's equilibration (false infeasibility reports)
-        movable = np.abs(kept_matrix @ basis).max(axis=1, initial=0.0) > self.rank_tolerance * max(
-            1.0, float(np.abs(kept_matrix).max(initial=0.0)))
+        movable = self._movable(kept_matrix, basis)
         kept_matrix, kept_lower, kept_upper = kept_matrix[movable], kept_lower[movable], kept_upper[movable]
         m_kept = len(kept_lower)
         ws = self._workspace((*key, m_kept), free + m_own, m_kept + m_own, free)
