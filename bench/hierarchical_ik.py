@@ -13,7 +13,7 @@ on a KinematicDevice integrating the velocity (``q+ = q (+) dt v``).
   Table 4.10 times for SoT (0.5-0.7 ms average, C++).
 - **cascade**: the solver's own ``solve_time`` (elimination, closed-form levels, ProxQP levels).
 - variants interleaved round by round: the stack as Table 4.1 lists it (equalities only) and
-  with the joint limits (32 inequalities) at level 0; each with the default ``closed_form``
+  with the joint limits (32 inequalities) on a level of their own above the feet; each with the default ``closed_form``
   (ProxQP only for a level whose closed-form step violates an inequality) and with every level
   sent to ProxQP (``closed_form=False``).
 """

@@ -234,8 +234,8 @@ class LexicographicCascade:
                 key = (tuple(lv.key for lv in levels[:index + 1]), basis.shape[1])
                 status, its, candidate = self._solve_qp(key, level, x, basis, kept, tick)
                 iterations, qp_levels = iterations + its, qp_levels + 1
-                if status != SOLVED:
-                    return self._failure(levels, n, status, iterations, qp_levels, start)
+                if status != SOLVED:  # keep what the levels above reached (they all still hold)
+                    return self._failure(levels, n, status, iterations, qp_levels, start, x)
             x = candidate
             pinned = kept.add(level, x, self.pin_tolerance)
             basis = free if pinned is None else self._least_squares(pinned, np.zeros(len(pinned)), free)[1]
@@ -451,11 +451,9 @@ class LexicographicCascade:
         if tick is None or tick != ws.tick:
             ws.guess, ws.tick = ws.latest, tick
         status, iterations = self._run(ws, self._guess(ws, level, x, basis))
-        if status != SOLVED:  # never a true infeasibility (see _workspace): once more, cold and looser
-            ws.initialised = False
-            ws.qp.settings.eps_abs = 100.0 * self.eps_abs
-            status, more = self._run(ws, None)
-            ws.qp.settings.eps_abs, iterations = self.eps_abs, iterations + more
+        if status != SOLVED:  # never a true infeasibility (see _workspace): once more, cold, for the
+            status, more = self._closest_feasible(ws)  # closest feasible point, which is then the optimum
+            iterations += more
         if status != SOLVED:
             ws.initialised = False
             return status, iterations, x
@@ -463,6 +461,22 @@ class LexicographicCascade:
         solution = x + basis @ self._polish(ws, projected, target, free, m_kept)
         ws.latest = (solution, ws.qp.results.z.copy())
         return status, iterations, solution
+
+    def _closest_feasible(self, ws: _Workspace) -> tuple[int, int]:
+        """A cold solve with ProxQP's ``primal_infeasibility_solving``: on a feasible problem
+        that ProxQP wrongly calls infeasible (it happens on small degenerate levels, e.g. two
+        variables and three rows meeting at the origin) its closest feasible point is the
+        optimum, refined by :meth:`_polish` as any other answer."""
+        settings = ws.qp.settings
+        ws.initialised, settings.primal_infeasibility_solving = False, True
+        try:
+            status, iterations = self._run(ws, None)
+            if ws.qp.results.info.status.name == "PROXQP_SOLVED_CLOSEST_PRIMAL_FEASIBLE" and \
+                    np.isfinite(ws.qp.results.x).all():
+                status = SOLVED
+        finally:
+            ws.initialised, settings.primal_infeasibility_solving = False, False
+        return status, iterations
 
     def _polish(self, ws: _Workspace, projected: np.ndarray, target: np.ndarray, free: int, m_kept: int) -> np.ndarray:
         """ProxQP's ``z``, refined on its active set: the kept rows it stops at become equalities
@@ -524,8 +538,10 @@ class LexicographicCascade:
         return proxqp_status(qp.results), int(qp.results.info.iter)
 
     def _failure(self, levels: Sequence[Level], n: int, status: int, iterations: int, qp_levels: int,
-                 start: float) -> CascadeSolution:
-        """Zeros and ``status``; every warm start is dropped (the next tick starts cold)."""
+                 start: float, x: np.ndarray | None = None) -> CascadeSolution:
+        """``status`` with the solution of the levels above the failed one (zeros when the data
+        is not finite); every warm start is dropped (the next tick starts cold)."""
         for ws in self._workspaces.values():
             ws.initialised, ws.latest, ws.guess = False, None, None
-        return CascadeSolution(np.zeros(n), status, iterations, qp_levels, time.perf_counter() - start, levels)
+        x = np.zeros(n) if x is None else x
+        return CascadeSolution(x, status, iterations, qp_levels, time.perf_counter() - start, levels)

@@ -39,8 +39,9 @@ class HierarchicalSolver(StackCommands, dg.Entity):
 
     Failures never raise: non-finite rows or a failed ProxQP level give ``status`` (the codes
     of the inverse-dynamics solver: 0 solved, 1 max iterations, 2 primal infeasible, 3 dual
-    infeasible, 4 not finite, 5 other) and ``velocity = 0`` (the robot stops); the next tick
-    starts cold.
+    infeasible, 4 not finite, 5 other). After a failed level ``velocity`` is the solution of the
+    levels above it, which all still hold (limits and contacts first); with non-finite rows it
+    is 0 (the robot stops). The next tick starts cold.
 
     Parameters: ``model`` (sizes ``v``), ``tasks`` (names of the task inputs), ``priorities``
     (one per task, 0 highest, equal values share a level; default: one level per task in
@@ -109,7 +110,7 @@ class HierarchicalSolver(StackCommands, dg.Entity):
 
     @dg.output(shape=("nv",), depends=("solution",))
     def velocity(self, t: int) -> np.ndarray:
-        """``v`` (zeros after a failure)."""
+        """``v`` (after a failed level, the levels above it; zeros for non-finite rows)."""
         return self.solution(t).x
 
     @dg.output(shape=None, depends=("solution",))

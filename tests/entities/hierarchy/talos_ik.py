@@ -26,7 +26,8 @@ def half_sitting() -> np.ndarray:
 
 def build(q: np.ndarray | None = None, *, hand: bool = False, limits: bool = True, **solver_params) -> dg.Graph:
     """The Table 4.1 stack on a kinematic TALOS starting at ``q`` (default half-sitting); with
-    ``limits`` the joint limits join the contacts at level 0 (Table 4.1 does not list them)."""
+    ``limits`` the joint limits form a level of their own above it (Table 4.1 does not list
+    them; sharing the contacts' level would let a contact correction trade against them)."""
     g = dg.Graph(dt=0.001, name="talos_ik_test")
     q0 = half_sitting() if q is None else q
     g.add(KinematicDevice("device", control_mode="velocity", model="talos", q0=q0))
@@ -57,7 +58,9 @@ def build(q: np.ndarray | None = None, *, hand: bool = False, limits: bool = Tru
         g.plug(f"{feature.name}.feature", f"{name}.feature")
     tasks = ["left_foot", "right_foot", *(["limits"] if limits else []), "com_height", "com_xy",
              *(["hand"] if hand else []), "waist", "posture"]
-    priorities = [0, 0, *([0] if limits else []), 1, 2, *([3] if hand else []), 3 + hand, 4 + hand]
+    top = 1 if limits else 0  # the limits alone on top: nothing below can trade against them
+    priorities = [top, top, *([0] if limits else []), top + 1, top + 2, *([top + 3] if hand else []),
+                  top + 3 + hand, top + 4 + hand]
     g.add(HierarchicalSolver("solver", tasks=tasks, priorities=priorities, **solver_params))
     for name in tasks:
         g.plug(f"{name}.rows", f"solver.{name}")

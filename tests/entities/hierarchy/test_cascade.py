@@ -251,3 +251,23 @@ def test_solving_twice_at_a_tick_gives_the_same_answer_bit_for_bit():
     first = cascade.solve(levels, 6, tick=1).x.copy()
     again = cascade.solve(levels, 6, tick=1).x
     assert np.array_equal(first, again)
+
+
+def test_a_level_proxqp_wrongly_calls_infeasible_is_still_solved():
+    """A degenerate level (two free variables, three kept rows meeting at the origin) that
+    ProxQP 0.8 reports primal infeasible: the cascade asks it for the closest feasible point,
+    which is the optimum (found by an adversarial review; daqp's level residual is 10.78)."""
+    n = 6
+    A0=np.array([[-0.45847334,-0.29589576,-0.14887333,0.31375677,0.67355533,1.06139718],[-0.98809876,-0.017701,0.07812119,-0.5180995,-0.37099684,-1.09371413],[-0.44024792,-0.62895152,-0.09565834,-0.5672239,1.00408671,-0.74250488],[1.21768832,-0.78653762,0.25859744,-1.29306872,-0.18439394,-1.22564644]])
+    b0=np.array([1.8171133,-0.9832738,-0.59508729,-0.74868195])
+    A1=np.array([[-1.05723628,1.90368377,1.1584588,0.53435617,0.15388934,-0.54400092],[-0.08773643,-0.66425882,-0.80653911,0.54484423,-0.54719447,-0.17393544],[-1.03672747,-0.41049706,0.13471159,0.14521546,0.47701942,-0.20218521],[-1.19353792,-1.23279461,0.90549224,-1.0961047,0.22346741,1.9571205],[-0.24573128,2.46651269,-0.49720689,-0.53984205,0.05691043,-1.84299362]])
+    b1=np.array([-3.58501003,-1.01125333,2.3329182,2.02375671,3.58835503])
+    none = (np.zeros((0, n)), np.zeros(0), np.zeros(0))
+    inequalities = random_level(np.random.default_rng(n + 2), 0, n, 0, 3, around_zero=True)
+    top = Level("top", np.zeros((0, n)), np.zeros(0), inequalities.inequality_matrix, inequalities.lower,
+                inequalities.upper)
+    for closed_form in (True, False):
+        solution = LexicographicCascade(closed_form=closed_form).solve(
+            [top, Level(0, A0, b0, *none), Level(1, A1, b1, *none)], n)
+        assert solution.status == SOLVED
+        np.testing.assert_allclose(solution.residuals, [0.0, 0.0, 10.7832426], atol=1e-6)
