@@ -13,17 +13,14 @@ class AnchoredContact:
     Declares the input ``active`` (commands ``activate`` / ``deactivate`` set it) and the state
     ``anchor`` (what :meth:`here` returned at the first active tick; ``None`` while inactive,
     staged only when it changes, so a steady contact does not disturb its readers).
-    Subclasses define :meth:`here`: the current placement or point, as a copy.
+    Subclasses define ``here(t)``: where the contact frame is at ``t`` (the placement or the
+    point, as a copy), which is what an activation anchors.
     """
 
     has_state = True
 
     active = dg.Input(shape=(), dtype="bool", default=True, doc="whether the contact is in the QP")
     anchor = dg.State(dtype="object", doc="anchored placement or point; None while inactive")
-
-    def here(self, t: int) -> Any:
-        """Where the contact frame is at ``t`` (what an activation anchors)."""
-        raise NotImplementedError
 
     def anchor_or_here(self, t: int) -> Any:
         """The anchor, or the current placement before the first anchoring tick."""
