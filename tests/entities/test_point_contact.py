@@ -143,8 +143,10 @@ def test_force_reference_flows_into_the_constraint(model):
     q = model.referenceConfigurations["half_sitting"]
     g, _, contact = contact_graph(q, np.zeros(model.nv), force_weight=10.0)
     rows = contact.contact(0)
-    np.testing.assert_array_equal(rows.force_reference, np.zeros(3))
+    assert rows.force_reference is None  # unplugged and unset: a plain contact, not a force task
     assert rows.force_weight == 10.0
+    contact.force_reference.set([0.0, 0.0, 3.0])
+    np.testing.assert_array_equal(contact.contact(0).force_reference, [0.0, 0.0, 3.0])
     task = g.add(ForceTask("force_task"))
     task.reference.set([0.0, 0.0, 12.0])
     task.measured.set([0.0, 0.0, 10.0])
