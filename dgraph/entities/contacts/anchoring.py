@@ -5,13 +5,14 @@ from __future__ import annotations
 from typing import Any
 
 import dgraph as dg
+from dgraph.entities.activation import Activatable
 
 
-class AnchoredContact:
+class AnchoredContact(Activatable):
     """Mixin for a contact that holds its frame where it was when the contact became active.
 
-    Declares the input ``active`` (commands ``activate`` / ``deactivate`` set it) and the state
-    ``anchor`` (what :meth:`here` returned at the first active tick; ``None`` while inactive,
+    Has the input ``active`` (:class:`~dgraph.entities.activation.Activatable`) and declares the
+    state ``anchor`` (what :meth:`here` returned at the first active tick; ``None`` while inactive,
     staged only when it changes, so a steady contact does not disturb its readers).
     Subclasses define ``here(t)``: where the contact frame is at ``t`` (the placement or the
     point, as a copy), which is what an activation anchors.
@@ -19,7 +20,6 @@ class AnchoredContact:
 
     has_state = True
 
-    active = dg.Input(shape=(), dtype="bool", default=True, doc="whether the contact is in the QP")
     anchor = dg.State(dtype="object", doc="anchored placement or point; None while inactive")
 
     def anchor_or_here(self, t: int) -> Any:
@@ -31,16 +31,6 @@ class AnchoredContact:
         """No anchor until the first active tick."""
         self.anchor.set(None, 0)
         self._changed = False
-
-    @dg.command
-    def activate(self) -> None:
-        """Add the contact (anchored where the frame is at the next tick)."""
-        self.active.set(True)
-
-    @dg.command
-    def deactivate(self) -> None:
-        """Remove the contact from the QP."""
-        self.active.set(False)
 
     def prepare_state(self, t: int) -> None:
         """Anchor at the first active tick; forget the anchor when inactive."""

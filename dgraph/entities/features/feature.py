@@ -38,6 +38,15 @@ class FeatureValue:
                             self.drift[rows], self.reference_acceleration[rows], self.is_rate)
 
 
+def read_feature(entity: dg.Entity, t: int) -> FeatureValue:
+    """``entity.feature(t)``, which must be a feature's output (``SpecError`` naming the input)."""
+    value = entity.feature(t)
+    if not isinstance(value, FeatureValue):
+        raise dg.SpecError(f"{entity.name}.feature at tick {t}: expected a feature's output, got "
+                           f"{type(value).__name__}", entity=entity.name, signal="feature")
+    return value
+
+
 def parse_mask(entity: dg.Entity, mask: str, width: int) -> np.ndarray | None:
     """Rows selected by a mask string such as ``"000111"`` (``None`` when all are selected)."""
     if len(mask) != width or set(mask) - {"0", "1"} or "1" not in mask:

@@ -5,12 +5,13 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
+from dgraph.entities.activation import Activatable
 from dgraph.entities.hierarchy.rows import PriorityRows
 from dgraph.entities.robot.robot_state import load_model, plugged_model
 
 
 @dg.register
-class JointLimits(dg.Entity):
+class JointLimits(Activatable, dg.Entity):
     """The model's joint limits as bounds on the next velocity (SoT's joint-limit task).
 
     For each one-degree-of-freedom joint ``j`` (position ``q_j``, velocity ``v_j``) of the
@@ -36,7 +37,6 @@ class JointLimits(dg.Entity):
     velocity_scale = dg.Param(1.0, kind="float", minimum=0.0, doc="fraction of the velocity limits allowed")
 
     robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
-    active = dg.Input(shape=(), dtype="bool", default=True, doc="whether the limits are in their level")
 
     def configure(self) -> None:
         """The one-dof joints and their limits."""
@@ -57,16 +57,6 @@ class JointLimits(dg.Entity):
         if model is not None and model.nv != self.nv:
             return [f"its model has nv = {self.nv} but the plugged robot has nv = {model.nv}"]
         return []
-
-    @dg.command
-    def activate(self) -> None:
-        """Put the limits back in their level."""
-        self.active.set(True)
-
-    @dg.command
-    def deactivate(self) -> None:
-        """Leave the limits' level without them."""
-        self.active.set(False)
 
     @dg.output(dtype="object", depends=("robot", "active"))
     def rows(self, t: int) -> PriorityRows:

@@ -5,14 +5,15 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.features.feature import FeatureValue
+from dgraph.entities.activation import Activatable
+from dgraph.entities.features.feature import FeatureValue, read_feature
 from dgraph.entities.hierarchy.adaptive_gain import adaptive_gain
 from dgraph.entities.hierarchy.rows import PriorityRows
 from dgraph.entities.tasks.gains import Gains
 
 
 @dg.register
-class VelocityTask(dg.Entity):
+class VelocityTask(Activatable, dg.Entity):
     """A task of the inverse-kinematics stack (thesis Eq. 4.1–4.2, 2.45; SoT's Task).
 
     With the feature's ``e = x (-) x*``, ``J`` and ``e_dot = J v - x_dot*`` (so the reference
@@ -40,7 +41,6 @@ class VelocityTask(dg.Entity):
 
     feature = dg.Input(dtype="object", doc="the feature's value (error, rate, Jacobian)")
     robot = dg.Input(dtype="object", doc="the RobotModel's state the feature was evaluated at (for J v)")
-    active = dg.Input(shape=(), dtype="bool", default=True, doc="whether the task is in its level")
 
     def configure(self) -> None:
         """Declare the gain inputs."""
@@ -52,22 +52,8 @@ class VelocityTask(dg.Entity):
             self.declare("gain", dg.Input(default=1.0, doc="lambda (scalar or per row, 1/s)"))
         self._gains = Gains(self)
 
-    @dg.command
-    def activate(self) -> None:
-        """Put the task's rows back in its level."""
-        self.active.set(True)
-
-    @dg.command
-    def deactivate(self) -> None:
-        """Leave the task's level without its rows."""
-        self.active.set(False)
-
     def _feature(self, t: int) -> FeatureValue:
-        value = self.feature(t)
-        if not isinstance(value, FeatureValue):
-            raise dg.SpecError(f"{self.name}.feature at tick {t}: expected a feature's output, got "
-                               f"{type(value).__name__}", entity=self.name, signal="feature")
-        return value
+        return read_feature(self, t)
 
     @dg.output(shape=None)
     def gain_value(self, t: int) -> np.ndarray:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.features.feature import FeatureValue
+from dgraph.entities.features.feature import FeatureValue, read_feature
 from dgraph.entities.tasks.equation import TaskEquation
 from dgraph.entities.tasks.gains import Gains
 
@@ -54,11 +54,7 @@ class Task(dg.Entity):
         return kp, self._gain_vectors.vector("kd", size, t)
 
     def _feature(self, t: int) -> FeatureValue:
-        value = self.feature(t)
-        if not isinstance(value, FeatureValue):
-            raise dg.SpecError(f"{self.name}.feature at tick {t}: expected a feature's output, got "
-                               f"{type(value).__name__}", entity=self.name, signal="feature")
-        return value
+        return read_feature(self, t)
 
     @dg.output(dtype="object")
     def gains(self, t: int) -> tuple[np.ndarray, np.ndarray]:
