@@ -85,6 +85,19 @@ def _well_conditioned(symmetric: np.ndarray) -> bool:
     return bool(diagonal.min() ** 2 > PINV_TOLERANCE * diagonal.max() ** 2)
 
 
+def _inverse(symmetric: np.ndarray) -> np.ndarray:
+    """The inverse of a symmetric PSD matrix, or its pseudo-inverse when it is singular or its
+    condition number (estimated as ``||A|| ||A^-1||``, infinity norms) passes ``1 / PINV_TOLERANCE``."""
+    try:
+        inverse = np.linalg.inv(symmetric)
+    except np.linalg.LinAlgError:
+        return _pseudo_inverse(symmetric)
+    condition = np.abs(symmetric).sum(axis=1).max() * np.abs(inverse).sum(axis=1).max()
+    if not condition * PINV_TOLERANCE < 1.0:  # also catches NaN and inf
+        return _pseudo_inverse(symmetric)
+    return inverse
+
+
 def task_space_inertia(jacobian: np.ndarray, mass_matrix: np.ndarray, mass_matrix_inverse: np.ndarray) -> np.ndarray:
     """``Lambda = (J M^-1 J^T)^+`` (Eq. 5.5).
 
@@ -94,10 +107,7 @@ def task_space_inertia(jacobian: np.ndarray, mass_matrix: np.ndarray, mass_matri
     """
     rows, cols = jacobian.shape
     if rows <= cols:
-        inverse_inertia = jacobian @ mass_matrix_inverse @ jacobian.T
-        if _well_conditioned(inverse_inertia):
-            return np.linalg.inv(inverse_inertia)
-        return _pseudo_inverse(inverse_inertia)
+        return _inverse(jacobian @ mass_matrix_inverse @ jacobian.T)
     gram = jacobian.T @ jacobian
     if _well_conditioned(gram):
         j_pinv = np.linalg.solve(gram, jacobian.T)
