@@ -2,10 +2,19 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
+from hypothesis import settings
 
 import dgraph as dg
+
+# Property tests draw the same examples on every run ("repeatable", the default, what CI runs), so a
+# result never depends on the run; HYPOTHESIS_PROFILE=explore draws new ones each time (for hunting).
+settings.register_profile("repeatable", derandomize=True, database=None)
+settings.register_profile("explore", derandomize=False)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
 
 class Scale(dg.Entity):

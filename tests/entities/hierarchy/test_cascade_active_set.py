@@ -54,13 +54,13 @@ def test_the_active_set_matches_proxqp_and_daqp_on_levels_pushing_into_bounds(pr
     # daqp (an exact active set, refined on its KKT system): level by level the same residuals, or
     # lower at the first level where they differ
     assert_lexicographically_no_worse(levels, closed.x, reference_cascade(levels, n))
-    # ProxQP on every level, when it solves (a few of these problems get a false infeasibility,
-    # status 2): the same residuals to its accuracy (it may cross a bound by 1e-8, which a lower
-    # level with pulls of 1e-3 turns into 1e-6 of residual), or lower at the first level where
-    # they differ (on some vertices it stops 1e-3 short of a level's optimum, where daqp agrees
-    # with the active set)
+    # ProxQP on every level, when it solves, as a looser second opinion: the same residuals to
+    # its accuracy, or lower at the first level where they differ. It may cross a bound by 1e-8
+    # (seen: 1.2e-8 on a bound at 0), which lower levels with pulls of 10 turn into up to 2e-5 of
+    # relative cost; and on some vertices it stops 1e-3 short of a level's optimum, where daqp
+    # agrees with the active set.
     if qp.status == SOLVED:
-        assert_lexicographically_no_worse(levels, closed.x, qp.x, tolerance=1e-5)
+        assert_lexicographically_no_worse(levels, closed.x, qp.x, tolerance=1e-5, cost_tolerance=1e-3)
     assert (closed.x >= levels[0].lower - 1e-9).all() and (closed.x <= levels[0].upper + 1e-9).all()
 
 
