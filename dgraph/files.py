@@ -166,6 +166,10 @@ def _scalar(doc: _Document, node: yaml.Node, path: tuple[Any, ...], loader: yaml
     return value
 
 
+_SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+"""libyaml's safe loader when PyYAML was built with it (10x faster on large files), else PyYAML's."""
+
+
 def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], _Document]:
     """Parse and schema-check graph-file text; returns the data and its line map."""
     doc = _Document(file)
@@ -173,7 +177,7 @@ def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], _Document]
         raise GraphFileError(f"file larger than {MAX_BYTES} bytes", file=file)
     loader = None
     try:
-        loader = yaml.SafeLoader(text)
+        loader = _SAFE_LOADER(text)
         node = loader.get_single_node()
         if node is None:
             raise GraphFileError("the file is empty", file=file, line=1)

@@ -139,3 +139,21 @@ def test_rerun_option_before_the_file_and_file_settings_kept(tmp_path):
                                 "{signals: [robot.q], rrd_path: mine/rec.rrd}}\n"))
     assert main(["run", str(own), "--ticks", "5"]) == 0  # no --rerun: the file's own path is used
     assert (tmp_path / "mine" / "rec.rrd").exists() and not (tmp_path / "out").exists()
+
+
+def test_run_a_10000_deep_chain(tmp_path):
+    """A velocity-controlled integrator closed through 10,000 gains: v = -2 q, q(k) = (1 - 2 dt)^k."""
+    depth, gains = 10_000, ["1.0"] * 9_999 + ["-2.0"]
+    lines = ["name: deep_chain", "dt: 0.01", "entities:",
+             "  robot: {type: KinematicDevice, params: {control_mode: velocity, size: 1, q0: [1.0]}}"]
+    lines += [f"  g{i}: {{type: Gain, params: {{size: 1}}}}" for i in range(depth)]
+    lines += ["plugs:", "  - robot.q -> g0.input"]
+    lines += [f"  - g{i}.output -> g{i + 1}.input" for i in range(depth - 1)]
+    lines += [f"  - g{depth - 1}.output -> robot.control", "set:"]
+    lines += [f"  g{i}.gain: {gain}" for i, gain in enumerate(gains)]
+    lines += ["record: [robot.q]"]
+    (tmp_path / "deep.yaml").write_text("\n".join(lines) + "\n")
+    result = dgraph_cli("run", "deep.yaml", "--ticks", "5", "--rerun", "off", "--npz", "deep.npz", "-q", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    q = np.load(tmp_path / "deep.npz")["robot.q"][:, 0]
+    assert np.allclose(q, 0.98 ** np.arange(5), rtol=1e-12)

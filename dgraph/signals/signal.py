@@ -15,6 +15,7 @@ instance binds its own copy (see :mod:`dgraph.entity`). The contract is written 
 
 from __future__ import annotations
 
+import itertools
 import time as _time
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
@@ -27,6 +28,8 @@ if TYPE_CHECKING:
     from dgraph.entity import Entity
 
 _UNSET = object()
+_PLANS = itertools.count(1)
+"""Numbers of evaluation plans: a plan marks the outputs it visits with its own number."""
 
 
 class Signal:
@@ -97,14 +100,17 @@ class Output(Signal):
         "_down",
         "_fn",
         "_held",
+        "_mark",
         "_plugged",
         "_stale",
         "_time",
         "_unguarded",
+        "_upstream",
         "_value",
         "count",
         "depends",
         "deps",
+        "on_demand",
         "period",
         "time_varying",
         "total_duration",
@@ -112,13 +118,15 @@ class Output(Signal):
 
     def __init__(self, fn: Callable[..., Any] | None = None, *, shape: ShapeDecl = None,
                  dtype: str = "float", depends: Sequence[str] | None = None, period: int = 1,
-                 labels: Sequence[str] | None = None, doc: str = ""):
+                 labels: Sequence[str] | None = None, doc: str = "",
+                 on_demand: Sequence[str] | bool = ()):
         super().__init__(shape, dtype, labels, doc or (fn.__doc__ or "" if fn else "").strip())
         if not isinstance(period, int) or period < 1:
             raise SpecError(f"period must be an int >= 1, got {period!r}")
         self._fn = fn
         self.period = period
         self.depends = None if depends is None else tuple(depends)
+        self.on_demand: tuple[str, ...] | bool = on_demand if isinstance(on_demand, bool) else tuple(on_demand)
         self.time_varying = self.depends is not None and "t" in self.depends
         self._value: Any = None
         self._time: int | None = None
@@ -132,11 +140,13 @@ class Output(Signal):
         self.total_duration = 0.0
         self._held = False
         self._unguarded: Callable[..., Any] | None = None
+        self._upstream: list[Output] | None = None
+        self._mark = 0
 
     def bind(self, entity: Entity, name: str) -> Output:
         """Return this template's copy for ``entity`` (called by :class:`~dgraph.Entity`)."""
         out = type(self).__new__(type(self))
-        Output.__init__(out, None, depends=self.depends, period=self.period)
+        Output.__init__(out, None, depends=self.depends, period=self.period, on_demand=self.on_demand)
         self._bind_common(out, entity, name)
         if self._fn is not None:
             out._fn = self._fn.__get__(entity)
@@ -150,14 +160,65 @@ class Output(Signal):
         if t != clock.t:
             clock.advance(t)
         if self._stale:
-            return self._recompute(t)
+            return self._evaluate(t)
         return self._value
 
-    def _recompute(self, t: int, force: bool = False) -> Any:
-        """Compute the value at ``t`` (a periodic output already sampled in this window holds,
-        unless ``force``)."""
-        if self.period > 1 and not force and self._time is not None and t - t % self.period <= self._time <= t:
+    def _evaluate(self, t: int, force: bool = False) -> Any:
+        """Bring this stale output up to date at ``t``: first every stale output it needs, in
+        dependency order (:meth:`_stale_upstream`), so that its method finds its inputs fresh and
+        the Python stack stays flat whatever the graph's depth; then itself. A periodic output
+        already sampled in this window holds, unless ``force``."""
+        if self.period > 1 and not force and self._holds(t):
             return self._hold()
+        if self._clock.cache_enabled:  # with the cache off every read recomputes: nothing to prepare
+            for node in self._stale_upstream(t):
+                if node._stale:  # an on-demand read in an earlier method may have computed it
+                    node._compute(t)
+        return self._compute(t)
+
+    def _holds(self, t: int) -> bool:
+        """A periodic output whose value was sampled in the window of ``t`` (it serves its hold)."""
+        return self._time is not None and t - t % self.period <= self._time <= t
+
+    def _stale_upstream(self, t: int) -> list[Output]:
+        """The stale outputs this one reads, directly or not, in dependency order (each after
+        everything it reads): an iterative depth-first search that stops at fresh outputs, at
+        States, at periodic outputs that hold, and at on-demand dependencies. Its cost is the
+        number of stale outputs found, not the size of the graph."""
+        mark = self._mark = next(_PLANS)
+        order: list[Output] = []
+        stack = [(self, iter(self._upstream_outputs()))]
+        while stack:
+            node, pending = stack[-1]
+            for up in pending:
+                if up._stale and up._mark != mark and not (up.period > 1 and up._holds(t)):
+                    up._mark = mark
+                    stack.append((up, iter(up._upstream_outputs())))
+                    break
+            else:
+                stack.pop()
+                order.append(node)
+        order.pop()  # this output itself, computed by the caller
+        return order
+
+    def _upstream_outputs(self) -> list[Output]:
+        """The computed outputs this one reads ahead of its method: the sources of its declared
+        inputs and its entity's declared outputs, without States and on-demand dependencies.
+        Rebuilt after a plug or an unplug of one of its inputs."""
+        upstream = self._upstream
+        if upstream is None:
+            on_demand = self.on_demand
+            upstream = []
+            if on_demand is not True:
+                for dep in self.deps:
+                    source = dep._source if isinstance(dep, Input) else dep
+                    if source is not None and not isinstance(source, State) and dep.name not in on_demand:
+                        upstream.append(source)
+            self._upstream = upstream
+        return upstream
+
+    def _compute(self, t: int) -> Any:
+        """Run the method at ``t`` and cache its value (its inputs are normally fresh by now)."""
         if self._computing:
             raise ComputeError(f"{self.full_name} was read during its own computation at tick {t} "
                                "(an undeclared algebraic loop)", entity=self.entity.name, signal=self.name)
@@ -225,7 +286,7 @@ class Output(Signal):
         if held:
             self._held = False
             clock.held = [o for o in clock.held if o is not self]
-        self._recompute(t, force=True)
+        self._evaluate(t, force=True)
         if held:
             _invalidate_all(self._down)
 
@@ -439,6 +500,7 @@ class Input(Signal):
         self._source = source
         source._plugged.append(self)
         source._down.extend(self._subs)
+        self._forget_upstream()
         _invalidate_all(self._subs)
 
     def unplug(self) -> None:
@@ -450,9 +512,15 @@ class Input(Signal):
         for sub in self._subs:
             source._down.remove(sub)
         self._source = None
+        self._forget_upstream()
         if not self.is_set:
             self._fall_back()
         _invalidate_all(self._subs)
+
+    def _forget_upstream(self) -> None:
+        """The outputs reading this input list their upstream again at their next evaluation."""
+        for sub in self._subs:
+            sub._upstream = None
 
     @property
     def source(self) -> Output | None:
@@ -488,16 +556,22 @@ def _short(value: Any) -> str:
 
 
 def output(shape: ShapeDecl = None, dtype: str = "float", depends: Sequence[str] | None = None,
-           period: int = 1, labels: Sequence[str] | None = None,
-           doc: str = "") -> Callable[[Callable[..., Any]], Output]:
+           period: int = 1, labels: Sequence[str] | None = None, doc: str = "",
+           on_demand: Sequence[str] | bool = ()) -> Callable[[Callable[..., Any]], Output]:
     """Decorator declaring a computed output from a method ``def name(self, t)``.
 
     ``depends`` lists the names of the entity's inputs, states and other outputs that the
     method reads, plus ``"t"`` if the value depends on time itself. Without it, the output
     depends on every input and state of the entity (conservative).
+
+    Before the method runs, every stale output it depends on is brought up to date, in
+    dependency order. ``on_demand`` names the dependencies the method reads only on some ticks
+    (``True``: all of them), such as the unselected inputs of a switch: they still invalidate
+    the output, but are computed only if the method reads them.
     """
 
     def wrap(fn: Callable[..., Any]) -> Output:
-        return Output(fn, shape=shape, dtype=dtype, depends=depends, period=period, labels=labels, doc=doc)
+        return Output(fn, shape=shape, dtype=dtype, depends=depends, period=period, labels=labels, doc=doc,
+                      on_demand=on_demand)
 
     return wrap

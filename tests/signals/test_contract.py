@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import inspect
+import sys
+
 import numpy as np
 import pytest
 
@@ -380,3 +383,109 @@ def test_reset_forgets_a_constant_and_recomputes(graph):
     s.a.reset()
     with pytest.raises(dg.UnpluggedInputError, match=r"s\.a"):
         s.s(0)
+
+
+def _chain(graph, length):
+    """A Ticker feeding ``length`` Scale entities (k = 1) in series; returns the last output."""
+    graph.add(Ticker("dev", x0=1.0))
+    prev = graph["dev.x"]
+    for i in range(length):
+        e = graph.add(Scale(f"s{i}", k=1.0))
+        graph.plug(prev, e.u)
+        prev = e.y
+    return prev
+
+
+def test_a_10000_deep_chain_runs_under_the_default_recursion_limit(graph):
+    assert sys.getrecursionlimit() <= 1000  # the interpreter's default; nothing raised it
+    last = _chain(graph, 10_000)
+    graph.add(Probe("probe"))
+    graph.plug(last, "probe.u")
+    graph["dev"].before.add(graph["probe.seen"])  # the loop pulls the end of the chain every tick
+    graph.run(ticks=3)
+    assert last.value == 3.0 and graph["probe.seen"].value == 3.0
+    assert all(graph[f"s{i}"].y.count == 3 for i in range(0, 10_000, 999))  # once per tick each
+
+
+class Probe(dg.Entity):
+    """Records the depth of the Python stack when its output computes."""
+
+    u = dg.Input(shape=())
+
+    def configure(self):
+        self.depths = []
+
+    @dg.output(shape=(), depends=("u",))
+    def seen(self, t):
+        self.depths.append(len(inspect.stack(0)))
+        return self.u(t)
+
+
+def test_evaluation_order_keeps_the_stack_flat_whatever_the_depth():
+    depths = {}
+    for length in (5, 500):
+        g = dg.Graph()
+        g.add(Probe("probe"))
+        g.plug(_chain(g, length), "probe.u")
+        assert g["probe.seen"](0) == 1.0
+        depths[length] = g["probe"].depths[-1]
+    assert depths[5] == depths[500]  # every upstream output was computed before the probe's method
+
+
+def test_each_stale_output_is_computed_after_everything_it_reads(graph):
+    order = []
+
+    class Logged(dg.Entity):
+        a = dg.Input(shape=())
+        b = dg.Input(shape=(), default=0.0)
+
+        @dg.output(shape=(), depends=("a", "b"))
+        def y(self, t):
+            order.append(self.name)
+            return self.a(t) + self.b(t)
+
+    graph.add(Ticker("dev"))
+    for name in ("top", "left", "right", "bottom", "tail"):
+        graph.add(Logged(name))
+    for src, dst in [("dev.x", "top.a"), ("top.y", "left.a"), ("top.y", "right.a"), ("left.y", "bottom.a"),
+                     ("right.y", "bottom.b"), ("bottom.y", "tail.a"), ("left.y", "tail.b")]:
+        graph.plug(src, dst)
+    for t in range(3):
+        order.clear()
+        assert graph["tail.y"](t) == 3.0 * t
+        assert order.index("top") < order.index("left") < order.index("bottom") < order.index("tail")
+        assert order.index("right") < order.index("bottom") and sorted(order) == sorted(set(order))
+        graph.step()
+
+
+def test_on_demand_dependencies_are_computed_only_when_read(graph):
+    from dgraph.entities.operators import Switch
+
+    graph.add(Ticker("dev"))
+    first, second = graph.add(Scale("first"), Scale("second"))
+    switch = graph.add(Switch("switch"))
+    graph.plug("dev.x", "first.u")
+    graph.plug("dev.x", "second.u")
+    graph.plug("first.y", "switch.in0")
+    graph.plug("second.y", "switch.in1")
+    for _ in range(3):
+        switch.output(graph.t)
+        graph.step()
+    assert (first.y.count, second.y.count) == (3, 0)  # the unselected branch is never computed
+    switch.selection.set(1)
+    assert switch.output(graph.t) == 2.0 * graph.t and second.y.count == 1
+
+
+def test_a_holding_periodic_output_keeps_its_upstream_idle(graph):
+    graph.add(Ticker("dev"))
+    upstream = graph.add(Scale("upstream"))
+    held = graph.add(Periodic("held", every=5))
+    reader = graph.add(Sum2("reader"))
+    graph.plug("dev.x", "upstream.u")
+    graph.plug("upstream.y", "held.u")
+    graph.plug("held.y", "reader.a")
+    graph.plug("dev.x", "reader.b")  # the reader is stale every tick, the held output only every 5
+    for _ in range(10):
+        assert reader.s(graph.t) == 2.0 * (graph.t - graph.t % 5) + graph.t
+        graph.step()
+    assert reader.s.count == 10 and held.y.count == 2 and upstream.y.count == 2

@@ -99,7 +99,7 @@ class HierarchicalInverseDynamics(StackCommands, InverseDynamicsSolver):
             levels.append(Level(key, matrix, vector, np.zeros((0, n)), np.zeros(0), np.zeros(0)))
         return levels
 
-    @dg.output(dtype="object")
+    @dg.output(dtype="object", on_demand=True)  # reads only the tasks in the stack
     def solution(self, t: int) -> QPSolution:
         """Solve the cascade at ``t`` (or fall back)."""
         state = self.robot(t)

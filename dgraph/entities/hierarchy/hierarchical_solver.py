@@ -102,7 +102,7 @@ class HierarchicalSolver(StackCommands, dg.Entity):
                 places.append(place)
         return [*levels, self._minimum_norm], [*places, len(stack)]
 
-    @dg.output(dtype="object")
+    @dg.output(dtype="object", on_demand=True)  # reads only the tasks in the stack
     def solution(self, t: int) -> CascadeSolution:
         """The cascade's answer at ``t``."""
         levels, self._places = self._levels(t)

@@ -26,7 +26,7 @@ class Switch(dg.Entity):
         for i in range(self.n_inputs):
             self.declare(f"in{i}", dg.Input(shape=vector_shape))
 
-    @dg.output(shape=vector_shape)
+    @dg.output(shape=vector_shape, on_demand=True)
     def output(self, t: int) -> Any:
         """The selected input."""
         k = self.selection(t)
