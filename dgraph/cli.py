@@ -1,7 +1,7 @@
 """The ``dgraph`` command: run, check and draw graph files, list entity types.
 
     dgraph run FILE [--duration S | --ticks N] [--set entity.name=value ...]
-                    [--rerun save PATH | spawn | serve | off] [--npz PATH]
+                    [--rerun save PATH | spawn | serve | off] [--npz PATH] [--debug-checks]
     dgraph check FILE
     dgraph profile FILE [--ticks N] [--set entity.name=value ...]
     dgraph show FILE --format dot|mermaid [--signals] [-o OUT]
@@ -91,6 +91,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     overrides = {**_recorder_overrides(args.file, args), **_parse_sets(args.set)}
     graph = dgraph.load(args.file, overrides)
     graph.validate()
+    if args.debug_checks:
+        graph.check_values = graph.check_dependencies = True
     duration = args.duration if args.duration is not None else graph.duration
     if args.ticks is None and duration is None:
         raise GraphFileError("no run length: give --duration or --ticks, or 'duration' in the file", file=args.file)
@@ -182,6 +184,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="save [PATH] (default out/NAME.rrd), spawn, serve or off")
     run.add_argument("--npz", help="also write the recorded signals to this .npz file")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--debug-checks", action="store_true",
+                     help="check every computed value (shape, NaN) and every read against its declared "
+                          "dependencies (slow; names the first signal that goes wrong)")
     run.set_defaults(func=cmd_run)
     check = sub.add_parser("check", help="load and validate a graph file")
     check.add_argument("file")

@@ -157,3 +157,14 @@ def test_run_a_10000_deep_chain(tmp_path):
     assert result.returncode == 0, result.stderr
     q = np.load(tmp_path / "deep.npz")["robot.q"][:, 0]
     assert np.allclose(q, 0.98 ** np.arange(5), rtol=1e-12)
+
+
+@pytest.mark.filterwarnings("ignore:invalid value")
+def test_debug_checks_name_the_first_signal_that_computes_nan(tmp_path):
+    """An infinite setpoint: inf - inf gives NaN at tick 1 in ``error``. By default the NaN is
+    caught where it would become the device's state; the debug switch names where it starts."""
+    args = ("run", PD, "--ticks", "5", "--rerun", "off", "-q", "--set", "setpoint.value=[.inf, 0.0]")
+    plain = dgraph_cli(*args, cwd=tmp_path)
+    checked = dgraph_cli(*args, "--debug-checks", cwd=tmp_path)
+    assert plain.returncode == 2 and "robot.q: value contains NaN" in plain.stderr, plain.stderr
+    assert checked.returncode == 2 and "error.output at tick 1: computed a value containing NaN" in checked.stderr

@@ -169,9 +169,10 @@ def test_a_failed_tick_with_a_periodic_output_can_be_fixed_and_resumed(graph):
     graph.plug("k.output", "robot.control")
     k.gain.set(0.0)
     graph.run(ticks=4)
-    planner.u.set([float("inf")])  # 0 * inf = NaN downstream: the tick fails
-    with pytest.raises(dg.SpecError, match=r"k\.output at tick 4"):
+    planner.u.set([float("inf")])  # 0 * inf = NaN downstream: the device refuses it as its next state
+    with pytest.raises(dg.SpecError, match=r"robot\.q: value contains NaN") as info:
         graph.step()
+    assert (info.value.entity, graph.t, graph["robot.q"].time) == ("robot", 4, 4)
     planner.u.set([1.0])
     graph.run(ticks=3)  # the window's sample is taken again with the fixed input
     assert graph.t == 7 and planner.p.value.tolist() == [1.0]

@@ -20,7 +20,8 @@ class Clock:
     Attributes:
         t: the last tick at which a signal was read (``None`` before the first read).
         cache_enabled: when False every read recomputes (for validating the cache).
-        check_values: check each computed value against its spec (shape, NaN).
+        check_values: check each computed value against its spec (shape, NaN); a debugging aid, off by
+            default (shapes are checked at plug time; devices and solvers check what they consume).
         profiling: time each computation (``Output.total_duration``, exclusive of upstream).
         inner: profiling accumulator of the time spent in nested computations.
     """
@@ -33,7 +34,7 @@ class Clock:
         self.periodic: list[Output] = []
         self.held: list[Output] = []
         self.cache_enabled = True
-        self.check_values = True
+        self.check_values = False
         self.profiling = False
         self.inner = 0.0
 

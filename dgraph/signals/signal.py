@@ -171,9 +171,13 @@ class Output(Signal):
         if self.period > 1 and not force and self._holds(t):
             return self._hold()
         if self._clock.cache_enabled:  # with the cache off every read recomputes: nothing to prepare
-            for node in self._stale_upstream(t):
-                if node._stale:  # an on-demand read in an earlier method may have computed it
-                    node._compute(t)
+            upstream = self._upstream if self._upstream is not None else self._upstream_outputs()
+            for up in upstream:
+                if up._stale:  # something to prepare (the common case, fresh inputs, skips the search)
+                    for node in self._stale_upstream(t):
+                        if node._stale:  # an on-demand read in an earlier method may have computed it
+                            node._compute(t)
+                    break
         return self._compute(t)
 
     def _holds(self, t: int) -> bool:

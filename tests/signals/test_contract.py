@@ -206,6 +206,9 @@ def test_computed_nan_and_wrong_shape_are_reported_with_the_signal(graph):
         def y(self, t):
             return np.array([np.nan, 0.0]) if self.mode == "nan" else np.zeros(3)
 
+    assert not graph.check_values  # off by default: the hot path does not check computed values
+    assert graph.add(Bad("unchecked", mode="shape")).y(0).shape == (3,)
+    graph.check_values = True  # the debug switch checks every computed value
     with pytest.raises(dg.SpecError, match=r"bad\.y at tick 0: computed a value containing NaN"):
         graph.add(Bad("bad")).y(0)
     with pytest.raises(dg.SpecError, match=r"shape \(3,\)"):
