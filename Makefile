@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint bench clean
+.PHONY: demo test test-fast lint bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -19,6 +19,10 @@ demo: $(STAMP)
 ## test: lint, then the whole test suite
 test: $(STAMP) lint
 	$(BIN)/python -m pytest
+
+## test-fast: the developer's loop, everything but the closed-loop TALOS simulations (marker `sim`)
+test-fast: $(STAMP) lint
+	$(BIN)/python -m pytest -m "not sim"
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
