@@ -43,14 +43,34 @@ def exact_solution(workspace):
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_solution_matches_an_exact_solver_and_satisfies_the_dynamics(seed):
+    """The formulation is exact: at a tight tolerance ProxQP's answer is daqp's (the full QP,
+    torque-limit rows included, although the solver needs them only when one binds)."""
+    q, v = perturbed_state(seed)
+    graph = build(q, v, eps_abs=1e-9)
+    solver = graph["solver"]
+    solution = solver.solution(0)
+    assert solution.status == SOLVED and not solution.torque_limited
+    workspace = next(iter(solver._qp._workspaces.values()))
+    x = exact_solution(workspace)
+    assert np.abs(np.r_[solution.acceleration, np.concatenate(solution.forces)] - x).max() < 1e-4
+    assert dynamics_residual(graph) < 1e-6
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_default_tolerance_moves_the_torques_by_less_than_a_tenth_of_a_newton_metre(seed):
+    """eps_abs = 1e-6, from a cold start (the worst case; warm-started ticks do ~10x better,
+    bench/qp_tolerance.py): accelerations to 1e-4, torques to 0.1 N m of the exact optimum, the
+    dynamics to 1e-6."""
     q, v = perturbed_state(seed)
     graph = build(q, v)
     solver = graph["solver"]
     solution = solver.solution(0)
-    assert solution.status == SOLVED
     workspace = next(iter(solver._qp._workspaces.values()))
     x = exact_solution(workspace)
-    assert np.abs(np.r_[solution.acceleration, np.concatenate(solution.forces)] - x).max() < 1e-4
+    exact_tau = workspace.torque_rows @ x + graph["robot"].state(0).bias_forces[6:]
+    assert solver.eps_abs == 1e-6 and solution.status == SOLVED
+    assert np.abs(solution.acceleration - x[:38]).max() < 1e-4
+    assert np.abs(solution.tau - exact_tau).max() < 0.1
     assert dynamics_residual(graph) < 1e-6
 
 
@@ -64,6 +84,7 @@ def test_standing_still_forces_carry_the_weight_and_the_cop_is_inside_the_soles(
         assert (corners[:, 2] >= -1e-6).all()  # unilateral corners: CoP inside the sole
         assert (np.abs(corners[:, :2]) <= 0.3 / np.sqrt(2) * corners[:, 2:3] + 1e-6).all()
     assert np.abs(solver.acceleration(0)).max() < 0.1  # holding still: small accelerations
+    assert not solver.torque_limited(0)  # far from every limit: one solve, without the limit rows
 
 
 def test_torque_limits_hold_when_a_task_asks_for_more():
@@ -73,7 +94,7 @@ def test_torque_limits_hold_when_a_task_asks_for_more():
     graph["posture"].reference.set(reference)
     solver = graph["solver"]
     limits = graph["robot"].pin_model.effortLimit[6:]
-    assert solver.status(0) == SOLVED
+    assert solver.status(0) == SOLVED and solver.torque_limited(0)  # solved again with the limits
     assert (np.abs(solver.tau(0)) <= limits + 1e-5).all()
     assert (np.abs(solver.tau(0)) >= limits - 1e-3).any()  # some limit is active
     assert dynamics_residual(graph) < 1e-6
@@ -200,3 +221,46 @@ def test_validation_names_a_missing_frame_and_a_model_size_mismatch(tmp_path):
                    "  foot: {type: Contact6d, params: {frame: left_sole}}\nplugs: [robot.state -> foot.robot]\n")
     with pytest.raises(dg.GraphFileError, match=r"bad.yaml:4 \[entities.foot\].*no frame 'left_sole'"):
         dg.load(str(bad)).validate()
+
+
+def test_the_assembly_allocates_no_array_in_steady_state():
+    """Over 100 ticks of a moving robot, filling the QP allocates at most the small Python objects
+    of numpy calls (keyword dictionaries, views: ~0.5 kB at once), never an array of the problem
+    (H alone is 31 kB, one task's A^T W A 11.5 kB); a whole solve adds only its answer (x, tau,
+    the forces, the solution object). Measured as the peak of traced memory above its level
+    before the call (tracemalloc traces numpy's buffers too)."""
+    import tracemalloc
+
+    from tests.entities.talos_graph import CONTACTS, TASKS
+
+    graph = build()
+    qp = graph["solver"]._qp
+    q0 = half_sitting()
+
+    def problem(tick):
+        q = q0.copy()
+        q[7:] += 1e-3 * np.sin(0.1 * tick + np.arange(32))
+        graph["robot"].q.set(q)
+        state = graph["robot"].state(tick)
+        return (state.mass_matrix, state.bias_forces, [graph[n].equation(tick) for n in TASKS],
+                [graph[n].contact(tick) for n in CONTACTS])
+
+    def peak_above(call):
+        before = tracemalloc.get_traced_memory()[0]
+        tracemalloc.reset_peak()
+        call()
+        return tracemalloc.get_traced_memory()[1] - before
+
+    for tick in range(3):  # the first ticks make the workspace and the task layout
+        qp.solve(*problem(tick), tick)
+    tracemalloc.start()
+    try:
+        assembly, solve = [], []
+        for tick in range(3, 103):
+            data = problem(tick)
+            assembly.append(peak_above(lambda data=data: qp.assemble(*data)))
+            solve.append(peak_above(lambda data=data, tick=tick: qp.solve(*data, tick)))
+    finally:
+        tracemalloc.stop()
+    assert max(assembly) < 1024, max(assembly)
+    assert max(solve) < 4096, max(solve)

@@ -10,6 +10,7 @@ import dgraph as dg
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model, unactuated_dofs
 from dgraph.entities.solvers.inverse_dynamics_qp import (
+    DEFAULT_EPS_ABS,
     POWER_TOLERANCE,
     SOLVED,
     InverseDynamicsQP,
@@ -27,7 +28,9 @@ class InverseDynamicsSolver(dg.Entity):
     (:mod:`~dgraph.entities.solvers.inverse_dynamics_qp`):
     ``min sum_i w_i ||A_i a - b_i||^2 + sum_c w_c ||f_c||^2`` subject to the floating-base
     dynamics, the contacts' motion constraints, friction pyramids, normal-force bounds and the
-    torque limits, then recovers ``tau = M_j a + h_j - (J_c^T T)_j f`` (Eq. 2.4).
+    torque limits, then recovers ``tau = M_j a + h_j - (J_c^T T)_j f`` (Eq. 2.4). The torque
+    limits enter the QP only on ticks where the answer without them would exceed one
+    (``torque_limited``); the answer is the same either way.
 
     When the QP fails (infeasible, iteration limit, non-finite data), ``status`` says why
     (0 solved, 1 max iterations, 2 primal infeasible, 3 dual infeasible, 4 not finite,
@@ -52,13 +55,15 @@ class InverseDynamicsSolver(dg.Entity):
     Outputs: ``solution`` (everything below, computed once), ``tau`` (actuated torques),
     ``acceleration`` (nv), ``contact_wrenches`` (one row ``[force, torque]`` per contact,
     world axes at the contact frame; zeros when inactive), ``normal_force_total`` (sum of the
-    world-z contact forces), ``status``, ``passivity_relaxed``, ``iterations``, ``solve_time`` (s).
+    world-z contact forces), ``status``, ``passivity_relaxed``, ``torque_limited``,
+    ``iterations`` and ``solve_time`` (s, assembly and every ProxQP solve of the tick).
     """
 
     model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the ports)")
     tasks = dg.Param((), kind="str_list", doc="task input names")
     contacts = dg.Param((), kind="str_list", doc="contact input names")
-    eps_abs = dg.Param(1e-9, kind="float", minimum=1e-12, maximum=1e-3, doc="ProxQP absolute tolerance")
+    eps_abs = dg.Param(DEFAULT_EPS_ABS, kind="float", minimum=1e-12, maximum=1e-3,
+                       doc="ProxQP absolute tolerance (also the torque-limit margin)")
     max_iterations = dg.Param(1000, kind="int", minimum=1, doc="ProxQP iteration limit")
     acceleration_weight = dg.Param(1e-6, kind="float", minimum=0.0, doc="regularisation of a")
     fallback_damping = dg.Param(1.0, kind="float", minimum=0.0, doc="joint damping of the fallback torque")
@@ -106,8 +111,6 @@ class InverseDynamicsSolver(dg.Entity):
 
     def _read(self, t: int) -> tuple[list[TaskEquation], list[ContactConstraint]]:
         tasks = [self._value(inp, TaskEquation, t) for inp in self._task_inputs]
-        for inp, equation in zip(self._task_inputs, tasks, strict=True):
-            self._check_equation(inp.name, equation, t)
         return tasks, [self._value(inp, ContactConstraint, t) for inp in self._contact_inputs]
 
     def _value(self, inp: dg.Input, kind: type, t: int) -> Any:
@@ -117,6 +120,13 @@ class InverseDynamicsSolver(dg.Entity):
             raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: expected a {kind.__name__}, got "
                                f"{type(value).__name__}", entity=self.name, signal=inp.name)
         return value
+
+    def _bad_equations(self, tasks: list[TaskEquation], t: int, cause: ValueError) -> dg.SpecError:
+        """The error naming the task input whose equation did not fit its block of the QP."""
+        for inp, equation in zip(self._task_inputs, tasks, strict=True):
+            self._check_equation(inp.name, equation, t)
+        return dg.SpecError(f"{self.name} at tick {t}: the task equations do not fit the QP: {cause}",
+                            entity=self.name)
 
     def _check_equation(self, name: str, equation: TaskEquation, t: int) -> None:
         """``A`` (m x nv), ``b`` (m), ``w`` (m) >= 0, or a ``SpecError`` naming the input."""
@@ -157,7 +167,10 @@ class InverseDynamicsSolver(dg.Entity):
         relax = passivity is not None and not self._reachable(passivity)
         if relax:  # no torque within the limits delivers the bound: ProxQP would only run to its limit
             passivity = Passivity(passivity.scale, None, passivity.velocity)
-        solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, active_contacts, t, passivity)
+        try:  # a task whose rows do not fit its block (shape, negative weights) is named here
+            solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, active_contacts, t, passivity)
+        except ValueError as exc:
+            raise self._bad_equations(tasks, t, exc) from None
         if solution.status != SOLVED and passivity is not None and passivity.power_bound is not None:
             relax = True
             relaxed = Passivity(passivity.scale, None, passivity.velocity)
@@ -202,9 +215,14 @@ class InverseDynamicsSolver(dg.Entity):
         """True when the passive QP failed and was solved without its passivity row."""
         return self.solution(t).passivity_relaxed
 
+    @dg.output(shape=(), dtype="bool", depends=("solution",))
+    def torque_limited(self, t: int) -> bool:
+        """True when a torque limit binds (the QP was solved a second time, with the limits)."""
+        return self.solution(t).torque_limited
+
     @dg.output(shape=(), dtype="int", depends=("solution",))
     def iterations(self, t: int) -> int:
-        """ProxQP iterations."""
+        """ProxQP iterations (of both solves when a torque limit binds)."""
         return self.solution(t).iterations
 
     @dg.output(shape=(), depends=("solution",))

@@ -1,4 +1,5 @@
-"""The weighted inverse-dynamics QP (thesis Eq. 4.14), assembled in place and solved by ProxQP.
+"""The weighted inverse-dynamics QP (thesis Eq. 4.14), assembled in one pass into preallocated
+buffers and solved by ProxQP.
 
 Variables ``x = [a, f]``: generalized accelerations ``a`` (nv) and the force variables ``f``
 of the active contacts. Torques are not variables: the actuated rows of the dynamics give
@@ -12,8 +13,8 @@ min  sum_i ||A_i a - s b_i||^2_{W_i} + sum_c w_c ||f_c - s f*_c||^2 + eps ||a||^
 s.t. M_u a - (J_c^T T)_u f = -h_u                         floating-base dynamics
      J_c a = rhs_c                                         each active contact
      l_c <= C_c f_c <= u_c                                 friction pyramids, normal force
-     tau_min - h_j <= M_j a - (J_c^T T)_j f <= tau_max - h_j   torque limits
      -v_j^T tau >= H_dot                                   passivity (only with a bound)
+     tau_min - h_j <= M_j a - (J_c^T T)_j f <= tau_max - h_j   torque limits (when one binds)
 ```
 
 ``f*_c`` is a contact's force reference (a force task's, thesis Eq. 4.12; 0 otherwise). The
@@ -21,10 +22,23 @@ passive mode of thesis Eq. 5.34 scales every task vector and force reference by
 ``s = beta gamma`` (Eq. 5.24) and adds the passivity row, ``-v_j^T tau >= H_dot`` with
 ``tau = M_j a + h_j - (J_c^T T)_j f``; with ``s = 1`` and no bound the problem is the plain one,
 bit for bit.
+
+**Layout** (the way TSID lays out its formulation): each task owns a fixed block of rows of one
+stacked matrix, each contact fixed columns of ``x`` and fixed rows of the equalities, so a tick
+copies every task's and contact's rows into their blocks and forms the cost with one product,
+``H_aa = (sqrt(2 W) A)^T (sqrt(2 W) A)``, instead of one product per task. Nothing is allocated
+in steady state (``tests/entities/test_inverse_dynamics.py`` counts it with ``tracemalloc``).
+
+**Torque limits only when one binds**: the QP is first solved without the ``n_a`` torque-limit
+rows (66 inequalities become 34 for TALOS on two feet: a quarter of the solve time). If the
+torques it gives respect every limit (to ``eps_abs``), that answer is also the optimum with
+the limits (adding constraints that the optimum satisfies does not move it); otherwise the QP
+is solved again with them (``QPSolution.torque_limited``).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from dataclasses import dataclass, field
@@ -39,6 +53,9 @@ INFINITY = 1e20
 """ProxQP's bound for 'no bound'."""
 POWER_TOLERANCE = 1e-9
 """W: a passivity bound this close to what the velocity allows counts as met (rounding noise)."""
+DEFAULT_EPS_ABS = 1e-6
+"""ProxQP's absolute tolerance: on recorded TALOS ticks it changes ``tau`` by at most ~1e-2 N m
+against 1e-9, with half the iterations (``bench/qp_tolerance.py``, docs/benchmarks.md)."""
 
 SOLVED, MAX_ITERATIONS, PRIMAL_INFEASIBLE, DUAL_INFEASIBLE, NOT_FINITE, NOT_SOLVED = range(6)
 STATUS_NAMES = ("solved", "max_iterations", "primal_infeasible", "dual_infeasible", "not_finite", "not_solved")
@@ -54,7 +71,7 @@ def proxqp_status(results: object) -> int:
     """The module's status code for ProxQP ``results`` (``NOT_FINITE`` for a "solved" answer
     with non-finite entries)."""
     status = _PROXQP_STATUS.get(results.info.status.name, NOT_SOLVED)
-    if status == SOLVED and not np.isfinite(results.x).all():
+    if status == SOLVED and not math.isfinite(np.vdot(results.x, results.x)):
         return NOT_FINITE
     return status
 
@@ -76,7 +93,8 @@ class QPSolution:
 
     ``status`` is one of the module constants (``SOLVED`` = 0); when it is not ``SOLVED``,
     ``tau`` is None (the solver entity puts its fallback there) and ``acceleration`` /
-    ``forces`` are zeros.
+    ``forces`` are zeros. ``iterations`` and ``solve_time`` add up every ProxQP solve of the
+    tick; ``torque_limited`` says the torque limits bound the answer (a second solve with them).
     """
 
     acceleration: np.ndarray
@@ -89,200 +107,370 @@ class QPSolution:
     contacts: list[ContactConstraint] = field(default_factory=list)
     contact_rows: list[int] = field(default_factory=list)  # which declared contact each one is (set by the entity)
     passivity_relaxed: bool = False  # solved again without the passivity row (set by the entity)
+    torque_limited: bool = False
 
 
-@dataclass(slots=True)
-class _Workspace:
-    """Preallocated matrices and the ProxQP object for one set of active contacts.
+class WarmStartedQP:
+    """One ProxQP dense problem of fixed size, solved tick after tick.
 
-    The contacts' friction rows, their bounds and the force regularisation do not change from
-    tick to tick: they are written when the workspace is made, or again when a contact hands
-    over different arrays (``sources`` keeps what was written).
+    Warm-started from the solution of the latest earlier tick, with the preconditioner of its
+    first solve (the problem's scaling hardly changes between ticks; recomputing it doubles the
+    solve time). Solving again at the same tick (a graph with its cache off) starts from the
+    same guess: ProxQP then gives the same answer bit for bit. After a failure the next solve
+    starts cold, with a new preconditioner (never from a failed iterate).
     """
 
-    qp: object
-    H: np.ndarray
-    g: np.ndarray
-    A: np.ndarray
-    b: np.ndarray
-    C: np.ndarray
-    lower: np.ndarray
-    upper: np.ndarray
-    sources: list[tuple[object, ...]] = field(default_factory=list)
-    initialised: bool = False
-    latest: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # last solution (x, y, z)
-    guess: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # warm start of this tick's solves
-    tick: int | None = None  # the tick ``guess`` serves
-    solved: tuple[list[np.ndarray], QPSolution] | None = None  # the problem solved at ``tick``, its answer
+    def __init__(self, n: int, n_eq: int, n_in: int, eps_abs: float, max_iterations: int):
+        qp = proxsuite.proxqp.dense.QP(n, n_eq, n_in)
+        qp.settings.eps_abs = eps_abs
+        qp.settings.eps_rel = 0.0
+        qp.settings.max_iter = max_iterations
+        qp.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START
+        self.qp = qp
+        self.initialised = False
+        self.has_solution = False  # the latest buffers hold a solution
+        self.latest = (np.zeros(n), np.zeros(n_eq), np.zeros(n_in))
+        self.guess = (np.zeros(n), np.zeros(n_eq), np.zeros(n_in))
+        self.guess_tick: int | None = None
+        self.has_guess = False
+
+    def _prepare_guess(self, tick: int | None, start: tuple[np.ndarray, ...] | None) -> None:
+        """This tick's guess: ``start`` if given, else the latest solution of an earlier tick
+        (the two sets of buffers swap: the new solution overwrites the older one)."""
+        if start is not None:
+            x, y, z = self.guess
+            np.copyto(x, start[0])
+            np.copyto(y, start[1])
+            z[:len(start[2])] = start[2]  # rows the start does not have begin at 0
+            z[len(start[2]):] = 0.0
+            self.guess_tick, self.has_guess = tick, True
+        elif tick is None or tick != self.guess_tick:
+            self.guess_tick = tick
+            self.has_guess = self.has_solution
+            if self.has_solution:
+                self.guess, self.latest = self.latest, self.guess
+
+    def solve(self, problem: tuple[np.ndarray, ...], tick: int | None,
+              start: tuple[np.ndarray, ...] | None = None) -> tuple[int, int]:
+        """ProxQP on ``problem`` = ``(H, g, A, b, C, lower, upper)``: ``(status, iterations)``; a
+        solution lands in :attr:`latest`. ``start`` = ``(x, y, z)`` replaces the warm start (``z``
+        may be shorter than this problem's: a solution without its last rows)."""
+        self._prepare_guess(tick, start)
+        qp = self.qp
+        if self.initialised:
+            qp.update(*problem, update_preconditioner=False)
+        else:
+            qp.init(*problem)
+            self.initialised = True
+        if self.has_guess:
+            qp.solve(*self.guess)
+        else:
+            qp.solve()
+        results = qp.results
+        info = results.info
+        status = _PROXQP_STATUS.get(info.status.name, NOT_SOLVED)
+        if status == SOLVED:
+            x, y, z = self.latest
+            np.copyto(x, results.x)  # ProxQP's arrays are views of its own memory
+            np.copyto(y, results.y)
+            np.copyto(z, results.z)
+            if not math.isfinite(np.vdot(x, x)):
+                status = NOT_FINITE
+        self.has_solution = status == SOLVED
+        if not self.has_solution:
+            self.initialised = False
+        return status, int(info.iter)
+
+
+class TaskRows:
+    """The stacked rows of a list of tasks of fixed sizes (the task part of the cost).
+
+    ``matrix`` (m x nv), ``vector`` and ``weight`` (m) hold every task's block of rows; the cost
+    ``sum_i w_i (A a - b)_i^2`` is ``a^T H a / 2 + g^T a`` + const with ``H = (R A)^T (R A)`` and
+    ``g = -(R A)^T (s R b)``, ``R = diag(sqrt(2 w))`` (ProxQP minimises ``x^T H x / 2 + g^T x``).
+    A task's weights are checked (>= 0) and rooted only when its weight array changes.
+    """
+
+    def __init__(self, sizes: tuple[int, ...], nv: int):
+        starts = np.cumsum((0, *sizes))
+        self.blocks = [slice(int(a), int(b)) for a, b in itertools.pairwise(starts)]
+        m = int(starts[-1])
+        self.matrix, self.vector, self.weight = np.zeros((m, nv)), np.zeros(m), np.zeros(m)
+        self.root, self.root_rows = np.zeros(m), np.zeros((m, nv))  # sqrt(2 w), and repeated along the rows
+        self.scaled = np.zeros((m, nv))
+        self._scaled_transposed = self.scaled.T
+        self.scaled_vector = np.zeros(m)
+        self.hessian, self.gradient = np.zeros((nv, nv)), np.zeros(nv)
+        self._weights: list[object] = [None] * len(sizes)
+
+    def write(self, tasks: list[TaskEquation]) -> bool:
+        """Copy every task's rows into its block; False if a task's weights are negative."""
+        matrix, vector, weight, weights = self.matrix, self.vector, self.weight, self._weights
+        changed = False
+        for index, (task, block) in enumerate(zip(tasks, self.blocks, strict=True)):
+            matrix[block] = task.matrix
+            vector[block] = task.vector
+            if task.weight is not weights[index]:
+                weight[block] = task.weight
+                weights[index] = task.weight
+                changed = True
+        if changed:
+            if (weight < 0.0).any():
+                self._weights = [None] * len(self.blocks)
+                return False
+            np.multiply(weight, 2.0, out=self.root)
+            np.sqrt(self.root, out=self.root)
+            self.root_rows[...] = self.root[:, None]  # a product with it needs no broadcast buffer
+        return True
+
+    def cost(self, scale: float) -> None:
+        """``hessian = (R A)^T (R A)`` and ``gradient = (R A)^T (s R b)`` (the negated ``g``)."""
+        np.multiply(self.matrix, self.root_rows, out=self.scaled)
+        np.multiply(self.vector, self.root, out=self.scaled_vector)
+        if scale != 1.0:
+            self.scaled_vector *= scale
+        np.dot(self._scaled_transposed, self.scaled, out=self.hessian)  # BLAS, no temporary (matmul has one)
+        np.dot(self._scaled_transposed, self.scaled_vector, out=self.gradient)
+
+
+class _ContactBlock:
+    """Where one active contact sits in a workspace: its force columns, its motion rows, and
+    views of both in the problem's matrices (made once)."""
+
+    def __init__(self, ws: Workspace, contact: ContactConstraint, column: int, row: int, friction_row: int, nv: int,
+                 nu: int):
+        k, m = contact.n_forces, len(contact.motion_rhs)
+        columns, rows = slice(column, column + k), slice(row, row + m)
+        self.columns = columns
+        self.generalized = np.zeros((nv, k))  # -J^T T: the columns of the contact's forces in the dynamics
+        self.base_part, self.joint_part = self.generalized[:nu], self.generalized[nu:]
+        self.dynamics = ws.A[:nu, columns]
+        self.torque = ws.torque_rows[:, columns]
+        self.motion_matrix = ws.A[rows, :nv]
+        self.motion_rhs = ws.b[rows]
+        self.force_gradient = ws.g[columns]
+        self.force_hessian = ws.H[columns, columns]
+        friction = slice(friction_row, friction_row + len(contact.friction_lower))
+        self.friction, self.friction_lower, self.friction_upper = ws.C[friction, columns], ws.lower[friction], \
+            ws.upper[friction]
+        self.written: tuple[object, ...] = ()  # the constant arrays last written
+        self.negated_generator = -contact.force_generator
+
+    def write_constant_rows(self, contact: ContactConstraint) -> None:
+        """Friction rows and bounds, force regularisation (constant: written again only when the
+        contact hands over other arrays than last time)."""
+        self.friction[...] = contact.friction_matrix
+        self.friction_lower[...] = np.maximum(contact.friction_lower, -INFINITY)
+        self.friction_upper[...] = np.minimum(contact.friction_upper, INFINITY)
+        self.force_hessian[...] = np.diag(np.full(contact.n_forces, 2.0 * contact.force_weight))
+        self.negated_generator = -contact.force_generator
+        self.written = (contact.friction_matrix, contact.friction_lower, contact.friction_upper,
+                        contact.force_weight, contact.force_generator)
+
+    def write(self, contact: ContactConstraint) -> None:
+        """The contact's columns of the dynamics and torque rows, and its motion rows."""
+        written = self.written
+        if (contact.friction_matrix is not written[0] or contact.friction_lower is not written[1]
+                or contact.friction_upper is not written[2] or contact.force_weight != written[3]
+                or contact.force_generator is not written[4]):
+            self.write_constant_rows(contact)
+        np.dot(contact.jacobian.T, self.negated_generator, out=self.generalized)
+        self.dynamics[...] = self.base_part
+        self.torque[...] = self.joint_part
+        self.motion_matrix[...] = contact.jacobian
+        self.motion_rhs[...] = contact.motion_rhs
+
+
+class Workspace:
+    """The matrices of the problem for one set of active contacts (with or without a passivity
+    row), the two ProxQP problems over them (without and with the torque-limit rows) and views
+    of their blocks.
+
+    ``C`` stacks the contacts' friction rows, the passivity row (if any) and the ``n_a``
+    torque rows (``torque_rows``, last); ``free`` solves without the torque rows. The friction
+    rows, their bounds and the force regularisation do not change from tick to tick: they are
+    written when the workspace is made, or again when a contact hands over different arrays.
+    The passivity row, when there is one, is the last row before the torque rows.
+    """
+
+    def __init__(self, qp: InverseDynamicsQP, contacts: list[ContactConstraint], passivity_row: bool):
+        nv, nu, na = qp.nv, qp.nu, qp.na
+        n = nv + sum(c.n_forces for c in contacts)
+        n_eq = nu + sum(len(c.motion_rhs) for c in contacts)
+        n_free = sum(len(c.friction_lower) for c in contacts) + passivity_row
+        self.n, self.n_free = n, n_free
+        self.H, self.g = np.zeros((n, n)), np.zeros(n)
+        self.A, self.b = np.zeros((n_eq, n)), np.zeros(n_eq)
+        self.C, self.lower, self.upper = np.zeros((n_free + na, n)), np.zeros(n_free + na), np.zeros(n_free + na)
+        self.torque_rows = self.C[n_free:]
+        self.torque_lower, self.torque_upper = self.lower[n_free:], self.upper[n_free:]
+        self.hessian_block, self.gradient_block = self.H[:nv, :nv], self.g[:nv]
+        self.acceleration_diagonal = self.H.reshape(-1)[: nv * (n + 1): n + 1]
+        self.base_dynamics, self.base_rhs = self.A[:nu, :nv], self.b[:nu]
+        self.torque_acceleration = self.torque_rows[:, :nv]
+        self.passivity_row = self.C[n_free - 1] if passivity_row else None
+        self.full = (self.H, self.g, self.A, self.b, self.C, self.lower, self.upper)
+        self.without_limits = (self.H, self.g, self.A, self.b, self.C[:n_free], self.lower[:n_free],
+                               self.upper[:n_free])
+        self.free = WarmStartedQP(n, n_eq, n_free, qp.eps_abs, qp.max_iterations)
+        self.limited: WarmStartedQP | None = None  # made at the first tick a torque limit binds
+        column, row, friction_row = nv, nu, 0
+        self.blocks: list[_ContactBlock] = []
+        for contact in contacts:
+            block = _ContactBlock(self, contact, column, row, friction_row, nv, nu)
+            block.write_constant_rows(contact)
+            self.blocks.append(block)
+            column, row = column + contact.n_forces, row + len(contact.motion_rhs)
+            friction_row += len(contact.friction_lower)
+        self.tau_excess = np.zeros(na)
+
+    def limited_qp(self, qp: InverseDynamicsQP) -> WarmStartedQP:
+        """The problem with the torque rows (made on first use)."""
+        if self.limited is None:
+            self.limited = WarmStartedQP(self.n, len(self.b), len(self.lower), qp.eps_abs, qp.max_iterations)
+        return self.limited
 
 
 class InverseDynamicsQP:
     """Builds and solves the QP for a robot with ``nv`` velocities, the first ``n_unactuated``
     of them unactuated (6 for a free-flyer base), and torque limits ``effort_limit``.
 
-    One ProxQP dense object is kept per set of active contacts (the problem's size) and
-    warm-started from the previous solution, with the preconditioner of its first solve (the
-    problem's scaling hardly changes between ticks; recomputing it doubles the solve time);
-    matrices are filled in place.
+    One :class:`Workspace` per set of active contacts (the problem's size), its matrices filled
+    in place; one :class:`TaskRows` per list of task sizes.
     """
 
-    def __init__(self, nv: int, n_unactuated: int, effort_limit: np.ndarray, *, eps_abs: float = 1e-9,
+    def __init__(self, nv: int, n_unactuated: int, effort_limit: np.ndarray, *, eps_abs: float = DEFAULT_EPS_ABS,
                  max_iterations: int = 1000, acceleration_weight: float = 1e-6):
         self.nv, self.nu = nv, n_unactuated
         self.na = nv - n_unactuated
         self.effort_limit = np.asarray(effort_limit, dtype=float)
+        self._negative_limit = -self.effort_limit
         self.eps_abs, self.max_iterations = eps_abs, max_iterations
         self.acceleration_weight = acceleration_weight
-        self._diagonal = np.diag_indices(nv)
-        self._workspaces: dict[tuple[object, ...], _Workspace] = {}
+        self._workspaces: dict[tuple[object, ...], Workspace] = {}
+        self._task_rows: dict[tuple[int, ...], TaskRows] = {}
+        self._passivity_row = np.zeros(0)
 
     # -- assembly ----------------------------------------------------------------------------
-    def _workspace(self, contacts: list[ContactConstraint], passivity_row: bool) -> _Workspace:
+    def workspace(self, contacts: list[ContactConstraint], passivity_row: bool) -> Workspace:
+        """The workspace of this set of active contacts (by name and size)."""
         key = (passivity_row, *((c.name, c.n_forces, len(c.friction_lower), len(c.motion_rhs)) for c in contacts))
         ws = self._workspaces.get(key)
         if ws is None:
-            nf = sum(c.n_forces for c in contacts)
-            n = self.nv + nf
-            n_eq = self.nu + sum(len(c.motion_rhs) for c in contacts)
-            n_in = sum(len(c.friction_lower) for c in contacts) + passivity_row + self.na
-            qp = proxsuite.proxqp.dense.QP(n, n_eq, n_in)
-            qp.settings.eps_abs = self.eps_abs
-            qp.settings.eps_rel = 0.0
-            qp.settings.max_iter = self.max_iterations
-            qp.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START
-            ws = _Workspace(qp, np.zeros((n, n)), np.zeros(n), np.zeros((n_eq, n)), np.zeros(n_eq),
-                            np.zeros((n_in, n)), np.zeros(n_in), np.zeros(n_in))
-            self._workspaces[key] = ws
-        sources = [(c.friction_matrix, c.friction_lower, c.friction_upper, c.force_weight) for c in contacts]
-        if len(sources) != len(ws.sources) or any(
-                any(a is not b for a, b in zip(new, old, strict=True)) for new, old in zip(sources, ws.sources,
-                                                                                          strict=True)):
-            self._write_constant_rows(ws, contacts)
-            ws.sources = sources
+            ws = self._workspaces[key] = Workspace(self, contacts, passivity_row)
         return ws
 
-    def _write_constant_rows(self, ws: _Workspace, contacts: list[ContactConstraint]) -> None:
-        """Friction rows and bounds, force regularisation."""
-        row, col = 0, self.nv
-        for contact in contacts:
-            k, m = contact.n_forces, len(contact.friction_lower)
-            ws.C[row:row + m, col:col + k] = contact.friction_matrix
-            ws.lower[row:row + m] = np.maximum(contact.friction_lower, -INFINITY)
-            ws.upper[row:row + m] = np.minimum(contact.friction_upper, INFINITY)
-            ws.H[np.arange(col, col + k), np.arange(col, col + k)] = 2.0 * contact.force_weight
-            row, col = row + m, col + k
+    def task_rows(self, tasks: list[TaskEquation]) -> TaskRows:
+        """The stacked rows for this list of task sizes."""
+        sizes = tuple(len(task.vector) for task in tasks)
+        rows = self._task_rows.get(sizes)
+        if rows is None:
+            rows = self._task_rows[sizes] = TaskRows(sizes, self.nv)
+        return rows
 
     def assemble(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, tasks: list[TaskEquation],
-                 contacts: list[ContactConstraint], passivity: Passivity | None = None) -> _Workspace:
-        """Fill the workspace for this tick's problem (see the module docstring)."""
-        nv, nu, na = self.nv, self.nu, self.na
+                 contacts: list[ContactConstraint], passivity: Passivity | None = None) -> Workspace:
+        """Fill the workspace for this tick's problem (see the module docstring); a task whose
+        rows do not fit its block, or whose weights are negative, raises ``ValueError``."""
         scale = 1.0 if passivity is None else passivity.scale
         bounded = passivity is not None and passivity.power_bound is not None
-        ws = self._workspace(contacts, bounded)
-        # cost on a: sum_i A_i^T W_i A_i and -A_i^T W_i b_i (times 2: ProxQP minimises x^T H x / 2 + g^T x)
-        hessian, gradient = 2.0 * self.acceleration_weight * np.eye(nv), np.zeros(nv)
-        for task in tasks:
-            weighted = task.matrix.T * (2.0 * task.weight)
-            hessian += weighted @ task.matrix
-            gradient -= weighted @ (task.vector if scale == 1.0 else scale * task.vector)
-        ws.H[:nv, :nv] = hessian
-        ws.g[:nv] = gradient
-        self._write_force_references(ws, contacts, scale)
-        # dynamics (floating-base rows) and torque rows share [M, -J_c^T T]
-        ws.A[:nu, :nv] = mass_matrix[:nu]
-        ws.b[:nu] = -bias_forces[:nu]
-        ws.C[-na:, :nv] = mass_matrix[nu:]
-        limit = self.effort_limit
-        ws.lower[-na:] = -limit - bias_forces[nu:]
-        ws.upper[-na:] = limit - bias_forces[nu:]
-        if contacts:
-            generalized = np.hstack([c.jacobian.T @ c.force_generator for c in contacts])
-            ws.A[:nu, nv:] = -generalized[:nu]
-            ws.C[-na:, nv:] = -generalized[nu:]
-            ws.A[nu:, :nv] = np.vstack([c.jacobian for c in contacts])
-            ws.b[nu:] = np.concatenate([c.motion_rhs for c in contacts])
+        ws = self.workspace(contacts, bounded)
+        rows = self.task_rows(tasks)
+        if not rows.write(tasks):
+            raise ValueError("negative task weights (the cost would not be convex)")
+        rows.cost(scale)
+        ws.hessian_block[...] = rows.hessian
+        ws.acceleration_diagonal += 2.0 * self.acceleration_weight
+        np.negative(rows.gradient, out=ws.gradient_block)
+        nu = self.nu
+        ws.base_dynamics[...] = mass_matrix[:nu]  # dynamics (floating-base rows) and torque rows share [M, -J_c^T T]
+        np.negative(bias_forces[:nu], out=ws.base_rhs)
+        ws.torque_acceleration[...] = mass_matrix[nu:]
+        np.subtract(self._negative_limit, bias_forces[nu:], out=ws.torque_lower)
+        np.subtract(self.effort_limit, bias_forces[nu:], out=ws.torque_upper)
+        for contact, block in zip(contacts, ws.blocks, strict=True):
+            block.write(contact)
+            if contact.force_reference is not None:  # -2 w_c s f*_c
+                np.multiply(contact.force_reference, -2.0 * contact.force_weight * scale, out=block.force_gradient)
+            else:
+                block.force_gradient.fill(0.0)
         if bounded:
             self._write_passivity_row(ws, passivity, bias_forces)
         return ws
 
-    def _write_passivity_row(self, ws: _Workspace, passivity: Passivity, bias_forces: np.ndarray) -> None:
+    def _write_passivity_row(self, ws: Workspace, passivity: Passivity, bias_forces: np.ndarray) -> None:
         """``-v_j^T tau >= H_dot`` with ``tau = (torque rows) x + h_j``, divided by the row's norm
         (the preconditioner is kept from the first solve: a row whose scale follows ``|v|`` would
         drift out of it). A zero row (``v ~ 0``) holds for every ``x`` up to rounding and is
         dropped (a bound out of reach is caught before by the entity)."""
         velocity = passivity.velocity[self.nu:]
-        row = -velocity @ ws.C[-self.na:]
+        row = ws.passivity_row
+        np.matmul(velocity, ws.torque_rows, out=row)
+        np.negative(row, out=row)
         bound = passivity.power_bound + velocity @ bias_forces[self.nu:]
         norm = math.sqrt(row @ row)
+        index = ws.n_free - 1
         if norm > 1e-12:
-            ws.C[-self.na - 1] = row / norm
-            ws.lower[-self.na - 1] = bound / norm
+            row /= norm
+            ws.lower[index] = bound / norm
         else:  # v ~ 0: -v_j^T tau ~ 0 for every tau, and H_dot is rounding noise (the entity relaxes larger ones)
-            ws.C[-self.na - 1] = 0.0
-            ws.lower[-self.na - 1] = -INFINITY
-        ws.upper[-self.na - 1] = INFINITY
-
-    def _write_force_references(self, ws: _Workspace, contacts: list[ContactConstraint], scale: float) -> None:
-        """``-2 w_c s f*_c`` in the gradient of the contacts that have a force reference."""
-        col = self.nv
-        for contact in contacts:
-            if contact.force_reference is not None:
-                ws.g[col:col + contact.n_forces] = (-2.0 * contact.force_weight * scale) * contact.force_reference
-            col += contact.n_forces
+            row[:] = 0.0
+            ws.lower[index] = -INFINITY
+        ws.upper[index] = INFINITY
 
     # -- solving -----------------------------------------------------------------------------
     def solve(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, tasks: list[TaskEquation],
               contacts: list[ContactConstraint], tick: int | None = None,
               passivity: Passivity | None = None) -> QPSolution:
-        """Assemble, solve, and recover ``tau``; never raises on a numerical failure (then
-        ``status`` says why and ``tau`` is None: the caller chooses the fallback).
-
-        The warm start is the solution of the latest earlier tick: solving again at the same
-        ``tick`` (a graph with its cache off) starts from the same guess and gives the same
-        answer bit for bit.
-        """
+        """Assemble, solve (again with the torque limits if one binds) and recover ``tau``; never
+        raises on a numerical failure (then ``status`` says why and ``tau`` is None: the caller
+        chooses the fallback)."""
         start = time.perf_counter()
         ws = self.assemble(mass_matrix, bias_forces, tasks, contacts, passivity)
-        problem = [ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper]
-        if tick is None or tick != ws.tick:
-            ws.guess, ws.tick, ws.solved = ws.latest, tick, None
-        elif ws.solved is not None and all(np.array_equal(a, b) for a, b in zip(problem, ws.solved[0], strict=True)):
-            return ws.solved[1]  # the same problem again in this tick: the same answer
-        finite = all(math.isfinite(np.vdot(m, m)) for m in (ws.H, ws.g, ws.A, ws.b, ws.C[-self.na - 1:], ws.lower))
-        status, iterations = self.run(ws, ws.guess) if finite else (NOT_FINITE, 0)
+        if not self._finite(ws):
+            return self._failed(NOT_FINITE, 0, contacts, start)
+        status, iterations = ws.free.solve(ws.without_limits, tick)
+        limited = False
+        if status == SOLVED:
+            tau = self._torques(ws, ws.free.latest[0], bias_forces)
+            limited = self._beyond_limits(ws, tau)
+            if limited:
+                qp = ws.limited_qp(self)  # from this tick's answer without the limits
+                status, more = qp.solve(ws.full, tick, start=ws.free.latest)
+                iterations += more
+                if status == SOLVED:
+                    tau = self._torques(ws, qp.latest[0], bias_forces)
         if status != SOLVED:
-            return QPSolution(np.zeros(self.nv), None, [np.zeros(c.n_forces) for c in contacts], status,
-                              iterations, time.perf_counter() - start, contacts=contacts)
-        x = ws.latest[0]
-        acceleration, forces = x[:self.nv], self._split_forces(x, contacts)
-        tau = ws.C[-self.na:] @ x + bias_forces[self.nu:]  # torque rows are [M_j, -(J^T T)_j]
-        solution = QPSolution(acceleration, tau, forces, SOLVED, iterations, time.perf_counter() - start,
-                              float(ws.qp.results.info.objValue), contacts)
-        if tick is not None:
-            ws.solved = ([m.copy() for m in problem], solution)
+            return self._failed(status, iterations, contacts, start)
+        x = (ws.limited if limited else ws.free).latest[0].copy()
+        solution = QPSolution(x[:self.nv], tau, self._split_forces(x, contacts), SOLVED, iterations,
+                              time.perf_counter() - start, 0.0, contacts, torque_limited=limited)
+        solution.objective = float((ws.limited if limited else ws.free).qp.results.info.objValue)
         return solution
 
-    def run(self, ws: _Workspace, guess: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> tuple[int, int]:
-        """ProxQP on an assembled workspace, warm-started from ``guess`` (``x, y, z``) or cold:
-        ``(status, iterations)``. A solution is kept in ``ws.latest``; after a failure the next
-        run starts cold (never from a failed iterate)."""
-        qp = ws.qp
-        if ws.initialised:
-            qp.update(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper, update_preconditioner=False)
-        else:
-            qp.init(ws.H, ws.g, ws.A, ws.b, ws.C, ws.lower, ws.upper)
-            ws.initialised = True
-        if guess is None:
-            qp.solve()
-        else:
-            qp.solve(*guess)
-        results = qp.results
-        status = proxqp_status(results)
-        if status == SOLVED:
-            ws.latest = (results.x.copy(), results.y.copy(), results.z.copy())
-        else:
-            ws.initialised, ws.latest = False, None
-        return status, int(results.info.iter)
+    def _finite(self, ws: Workspace) -> bool:
+        """Whether the problem is finite (a NaN or inf makes a squared norm non-finite; the bounds
+        are finite up to +-INFINITY, the upper torque bounds exactly when the lower ones are)."""
+        vdot = np.vdot
+        return math.isfinite(vdot(ws.H, ws.H) + vdot(ws.g, ws.g) + vdot(ws.A, ws.A) + vdot(ws.b, ws.b)
+                             + vdot(ws.C, ws.C) + vdot(ws.torque_lower, ws.torque_lower))
+
+    def _torques(self, ws: Workspace, x: np.ndarray, bias_forces: np.ndarray) -> np.ndarray:
+        """``tau = (torque rows) x + h_j`` (the torque rows are ``[M_j, -(J^T T)_j]``)."""
+        tau = ws.torque_rows @ x
+        tau += bias_forces[self.nu:]
+        return tau
+
+    def _beyond_limits(self, ws: Workspace, tau: np.ndarray) -> bool:
+        """Whether some ``|tau_j|`` exceeds its limit by more than ProxQP's tolerance."""
+        excess = ws.tau_excess
+        np.abs(tau, out=excess)
+        excess -= self.effort_limit
+        return bool(excess.max() > self.eps_abs)
+
+    def _failed(self, status: int, iterations: int, contacts: list[ContactConstraint], start: float) -> QPSolution:
+        return QPSolution(np.zeros(self.nv), None, [np.zeros(c.n_forces) for c in contacts], status, iterations,
+                          time.perf_counter() - start, contacts=contacts)
 
     def _split_forces(self, x: np.ndarray, contacts: list[ContactConstraint]) -> list[np.ndarray]:
         forces, col = [], self.nv
