@@ -45,8 +45,14 @@ Units: SI (m, N, s, rad); gains in 1/s^2 (kp) and 1/s (kd); ``kd: null`` means 2
   waist.frame, weight, kp, kd       TaskSE3Equality, level 1, reference = its initial pose
   waist.mask                        6 values (linear xyz, angular xyz); default orientation only
   waist.local_frame                 TSID's useLocalFrame (true is TSID's default)
+  momentum.weight, kp, kd           TaskAMEquality (centroidal angular momentum), level 1,
+                                    reference L = 0, dL = 0; disabled by default
+  frames                            list of extra TaskSE3Equality tasks, level 1, each
+                                    {name, frame, mask, weight, kp, kd, local_frame}, reference =
+                                    the frame's initial pose (default: none)
 
-Output keys: versions{tsid,libtsid,pinocchio,eigenpy,numpy,python}, solver, model{nq,nv,na,
+Output keys: versions{tsid,libtsid,pinocchio,eigenpy,numpy,python}, solver, threads_env (the
+OMP/OpenBLAS/MKL thread variables it ran with), model{nq,nv,na,
 mass_kg,armature}, nVar, nEq, nIn, tasks (names), ticks, warmup, dt,
 problem_data_us/solve_us/tick_us/loop_us as {median,p90,p99,mean,min,max}, failures,
 com_error_final_m, com_error_max_m, com_error_rms_m (|com - ref| over the counted ticks),
@@ -64,6 +70,7 @@ import copy  # noqa: E402
 import importlib.metadata as md  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
+import os  # noqa: E402
 import platform  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
@@ -105,6 +112,8 @@ DEFAULT_CONFIG: dict = {
         "enabled": True, "frame": "base_link", "weight": 1.0, "kp": 100.0, "kd": 20.0,
         "mask": [0, 0, 0, 1, 1, 1], "local_frame": True,
     },
+    "momentum": {"enabled": False, "weight": 0.02, "kp": 10.0, "kd": 0.0},
+    "frames": [],
 }
 
 SOLVERS = {"HQuadProgFast": tsid.SolverHQuadProgFast, "HQuadProg": tsid.SolverHQuadProg}
@@ -157,6 +166,22 @@ def posture_gain(gain, model: pin.Model, na: int) -> np.ndarray:
         out[idx] = gain[group][k]
     assert not np.isnan(out).any()
     return out
+
+
+def add_se3_task(formulation: tsid.InverseDynamicsFormulationAccForce, robot: tsid.RobotWrapper,
+                 data: pin.Data, cfg: dict) -> tsid.TaskSE3Equality:
+    """A TaskSE3Equality on ``cfg["frame"]`` (level 1), held at the frame's initial pose."""
+    model = robot.model()
+    task = tsid.TaskSE3Equality(cfg["name"], robot, cfg["frame"])
+    kp = vector(cfg["kp"], 6)
+    task.setKp(kp)
+    task.setKd(kd_of(kp, cfg["kd"]))
+    task.setMask(np.asarray(cfg["mask"], dtype=float))
+    task.useLocalFrame(bool(cfg["local_frame"]))
+    formulation.addMotionTask(task, float(cfg["weight"]), 1, 0.0)
+    h0 = robot.framePosition(data, model.getFrameId(cfg["frame"]))
+    task.setReference(tsid.TrajectorySE3Constant(f"traj-{cfg['name']}", h0).computeNext())
+    return task
 
 
 def stats(values_ns: list[int]) -> dict[str, float]:
@@ -225,18 +250,20 @@ def run(cfg: dict) -> dict:
         posture.setReference(tsid.TrajectoryEuclidianConstant("traj-posture", q[7:]).computeNext())
         tasks.append("task-posture")
 
-    w_cfg = cfg["waist"]
-    if enabled(w_cfg):
-        waist = tsid.TaskSE3Equality("task-waist", robot, w_cfg["frame"])
-        kp = vector(w_cfg["kp"], 6)
-        waist.setKp(kp)
-        waist.setKd(kd_of(kp, w_cfg["kd"]))
-        waist.setMask(np.asarray(w_cfg["mask"], dtype=float))
-        waist.useLocalFrame(bool(w_cfg["local_frame"]))
-        formulation.addMotionTask(waist, float(w_cfg["weight"]), 1, 0.0)
-        h0 = robot.framePosition(data, model.getFrameId(w_cfg["frame"]))
-        waist.setReference(tsid.TrajectorySE3Constant("traj-waist", h0).computeNext())
-        tasks.append("task-waist")
+    se3_cfgs = ([{"name": "task-waist", **cfg["waist"]}] if enabled(cfg["waist"]) else []) + cfg["frames"]
+    # the formulation keeps C++ references only: the Python task objects must outlive the loop
+    se3_tasks = [add_se3_task(formulation, robot, data, f_cfg) for f_cfg in se3_cfgs]
+    tasks.extend(task.name for task in se3_tasks)
+
+    m_cfg = cfg["momentum"]
+    if enabled(m_cfg):
+        momentum = tsid.TaskAMEquality("task-am", robot)
+        kp = vector(m_cfg["kp"], 3)
+        momentum.setKp(kp)
+        momentum.setKd(kd_of(kp, m_cfg["kd"]))
+        formulation.addMotionTask(momentum, float(m_cfg["weight"]), 1, 0.0)
+        momentum.setReference(tsid.TrajectorySample(3))  # L* = 0, dL* = 0
+        tasks.append("task-am")
 
     solver = SOLVERS[cfg["solver"]](f"solver-{cfg['solver']}")
     solver.resize(formulation.nVar, formulation.nEq, formulation.nIn)
@@ -292,6 +319,7 @@ def run(cfg: dict) -> dict:
                      "pinocchio": pin.__version__, "eigenpy": md.version("eigenpy"),
                      "numpy": np.__version__, "python": platform.python_version()},
         "solver": cfg["solver"],
+        "threads_env": {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")},
         "model": {"nq": robot.nq, "nv": robot.nv, "na": na, "mass_kg": mass,
                   "armature": sorted({float(a) for a in model.armature[6:]})},
         "nVar": formulation.nVar, "nEq": formulation.nEq, "nIn": formulation.nIn,
