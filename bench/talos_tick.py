@@ -1,50 +1,167 @@
 """TALOS control tick: dgraph's inverse-dynamics graph against TSID 1.10, in the same run.
 
     bash bench/setup_tsid.sh            # once: the TSID peer's own venv (.venv-tsid, pin 4.0.0)
-    .venv/bin/python bench/talos_tick.py [--ticks 5000] [--rounds 2] [--json out/talos_tick.json]
+    .venv/bin/python bench/talos_tick.py [--ticks 3000] [--rounds 3] [--sets bench demo demo+4]
+                                         [--json out/talos_tick.json] [--base ddec0a5]
 
-Task set of the TSID benchmark, on both sides: Contact6d x2 (soles, 4 corners, mu 0.3), CoM
-(weight 1e3, Kp 20, Kd 3, swaying 5 cm at 0.5 Hz), joint posture (weight 0.1, Table 4.3 gains,
-Kd = 2 sqrt(Kp)); force regularisation 1e-5, contact Kp 30, Kd 11.
+Task sets, the same on both sides (two Contact6d on the soles, 4 corners, mu 0.3, Kp 30, Kd 11,
+minimum normal force 1 N, force regularisation 1e-5, in every set):
 
-- **dgraph tick**: TALOS in MuJoCo (``graphs/talos_sway.py`` with the CoM and posture tasks,
-  no recorder). A ``before`` hook of the device pulls ``solver.tau(t)`` and times it: that is
-  the whole control graph (FloatingBaseEstimator + RobotModel + features + tasks + contacts +
-  QP assembly and solve, plus dgraph's signal overhead), without the simulator. Our QP also has
-  the 32 torque limits (66 inequalities against TSID's 34).
-- **TSID tick**: ``bench/peer_tsid.py`` in ``.venv-tsid``: ``computeProblemData`` + ``solve``
-  on its own kinematically integrated state (no simulator); eiquadprog (HQuadProgFast).
-- **real-time factor**: simulated time / wall time of the whole dgraph closed loop (control
-  graph + MuJoCo step), without recording; and with the recorder and 3D view of the demo.
+- ``bench`` (2 tasks, TSID's standing benchmark): CoM (weight 1e3, Kp 20, Kd 3, swaying 5 cm at
+  0.5 Hz) and joint posture (weight 0.1, Table 4.3 gains, Kd = 2 sqrt(Kp));
+- ``demo`` (4 tasks, those of ``graphs/talos_sway.yaml``): + waist orientation (``base_link``,
+  weight 1, Kp 100, Kd 20; TSID: TaskSE3Equality with the orientation mask) and angular
+  momentum (weight 0.02, Kp 10, Kd 0; TSID: TaskAMEquality);
+- ``demo+4`` (8 tasks): + full poses of both grippers' base frames and orientations of
+  ``torso_2_link`` and ``head_2_link`` (weight 0.1, Kp 10, Kd 2 sqrt(10), held at their initial
+  pose; ours: FramePose + Task entities added here, TSID: TaskSE3Equality).
 
-The variants are interleaved round by round (VM noise is +-20-30%); medians and p99 are per
-round, the ratio is dgraph's median over TSID's median in the same round.
+Ticks:
+
+- **dgraph tick**: TALOS in MuJoCo (``graphs/talos_sway.py`` with the set's tasks, no recorder).
+  A ``before`` hook of the device pulls ``solver.tau(t)`` and times it: the whole control graph
+  (FloatingBaseEstimator + RobotModel + features + tasks + contacts + QP assembly and solve,
+  plus dgraph's signal overhead), without the simulator. Our QP also has the 32 torque limits.
+- **TSID tick**: ``bench/peer_tsid.py`` in ``.venv-tsid``: ``computeProblemData`` + ``solve`` on
+  its own kinematically integrated state (no simulator); eiquadprog (HQuadProgFast).
+- **real-time factor**: simulated time / wall time of the closed loop of the ``bench`` graph
+  (control graph + MuJoCo step, no recording), and of the full demo (``graphs/talos_sway.yaml``
+  with its recorder and 3D view writing an .rrd into a temporary directory), once per round.
+
+Rounds: one warm-up round of both sides (not counted), then ``--rounds`` rounds, each running
+every set on our side then on TSID's. Per set and side: each round's median and p99, and the
+*best round* (lowest median). A round whose median exceeds 1.5 times the best round of the same
+side and set is **anomalous**; it is listed, with ``others busy``, the CPUs that other processes
+kept busy during it (calibration.BusyMeter). The headline figures are ratios against TSID in
+the same run; absolute times come with the calibration figure (bench/calibration.py) measured
+at the start and the end of the run, and in calibration loops.
+
+**Threads, and the first-round anomaly.** libtsid.so and Pinocchio's bindings (and proxsuite on
+our side) link libgomp. With the OpenMP defaults, TSID's tick runs parallel regions with a second
+thread that spins between them (half a vCPU in ``top -H`` even on a quiet machine). On 2 vCPUs,
+as soon as another process holds the other vCPU, each parallel region waits for that thread to
+be scheduled again: TSID's median goes from ~0.2 ms to 4-12 ms, p99 20-45 ms. What was busy was
+other jobs on the shared machine (another engineer's tests or a busy loop), not this script: it
+sleeps in ``subprocess.run`` while the peer runs. A first round is simply the likeliest to
+overlap a job started at the same time. So both sides run with ``OMP_NUM_THREADS``,
+``OPENBLAS_NUM_THREADS`` and ``MKL_NUM_THREADS`` set to 1: in this process before numpy is
+imported, and in the peer's environment (``--unpinned-peer`` runs the peer with the defaults,
+to reproduce the anomaly).
+
+Acceptance (one PASS/FAIL/SKIP line each, at the end): no anomalous round in any set on either
+side; our best-round median over TSID's at most 2.0 for ``bench`` and for ``demo``; our p99 at
+most 2x our median (best round of ``bench`` and ``demo``); the cost of one more task (slope of
+our best-round median over the number of tasks, least squares over the sets run) at most 40 us;
+with ``--base COMMIT``, the full demo's real-time factor at least doubles against that commit
+(bench/compare_commits.py, base against this working tree, in the same run).
 """
 
 from __future__ import annotations
 
-import argparse
-import json
-import platform
-import subprocess
 import sys
-import time
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
 sys.path.insert(0, str(ROOT / "graphs"))
 
+import calibration  # noqa: E402
+
+calibration.single_threaded()  # before numpy, Pinocchio and proxsuite read the thread variables
+
+import argparse  # noqa: E402
+import copy  # noqa: E402
+import importlib.metadata as md  # noqa: E402
+import json  # noqa: E402
+import math  # noqa: E402
+import os  # noqa: E402
+import subprocess  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+from dataclasses import dataclass  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pinocchio as pin  # noqa: E402
 import talos_sway  # noqa: E402
 
-TSID_CONFIG = {
+import dgraph as dg  # noqa: E402
+from dgraph.entities.features import FramePose  # noqa: E402
+from dgraph.entities.robot import load_model  # noqa: E402
+from dgraph.entities.solvers import InverseDynamicsSolver  # noqa: E402
+from dgraph.entities.tasks import Task  # noqa: E402
+
+ANOMALY_FACTOR = 1.5
+MAX_RATIO, MAX_P99_OVER_MEDIAN, MAX_TASK_COST_US, MIN_SPEEDUP = 2.0, 2.0, 40.0, 2.0
+
+
+@dataclass(frozen=True)
+class FrameTask:
+    """An extra pose task of the 8-task set: frame, mask (x y z rx ry rz), weight and gains."""
+
+    frame: str
+    mask: str
+    weight: float = 0.1
+    kp: float = 10.0
+    kd: float = 2.0 * math.sqrt(10.0)
+
+
+EXTRA_TASKS = {
+    "left_hand_task": FrameTask("gripper_left_base_link", "111111"),
+    "right_hand_task": FrameTask("gripper_right_base_link", "111111"),
+    "torso_task": FrameTask("torso_2_link", "000111"),
+    "head_task": FrameTask("head_2_link", "000111"),
+}
+SETS = {"bench": ("com_task", "posture_task"), "demo": talos_sway.TASKS,
+        "demo+4": (*talos_sway.TASKS, *EXTRA_TASKS)}
+TSID_BASE = {
     "contacts": {"mu": 0.3, "fMin": 1.0, "fMax": 1000.0, "kp": 30.0, "kd": 11.0, "w_force_reg": 1e-5},
     "com": {"weight": 1000.0, "kp": 20.0, "kd": 3.0, "sway_amplitude": [0.0, 0.05, 0.0], "sway_frequency": 0.5},
     "posture": {"weight": 0.1, "kp": {"legs": [10, 5, 5, 1, 10, 10], "torso": [100, 100],
                                       "arms": [50, 10, 10, 10, 50, 10, 10, 10], "head": [100, 100]}, "kd": None},
     "waist": None,
+    "momentum": {"enabled": False},
+    "frames": [],
 }
+TSID_WAIST = {"frame": "base_link", "weight": 1.0, "kp": 100.0, "kd": 20.0, "mask": [0, 0, 0, 1, 1, 1],
+              "local_frame": False}
+TSID_MOMENTUM = {"enabled": True, "weight": 0.02, "kp": 10.0, "kd": 0.0}
+
+
+# -- our side ------------------------------------------------------------------------------------
+def build(tasks: tuple[str, ...]) -> dg.Graph:
+    """The sway graph without recording, with ``tasks`` (of talos_sway.TASKS and EXTRA_TASKS)."""
+    graph = talos_sway.build(tasks=tuple(t for t in tasks if t in talos_sway.TASKS), record=False)
+    extra = [t for t in tasks if t in EXTRA_TASKS]
+    if extra:
+        add_frame_tasks(graph, extra)
+    return graph
+
+
+def add_frame_tasks(graph: dg.Graph, names: list[str]) -> None:
+    """Add FramePose + Task pairs held at the frames' initial pose, and a solver that has them too."""
+    model = load_model("talos")
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, graph["device"].sim.q0)
+    old = graph.remove("solver")
+    for name in names:
+        spec = EXTRA_TASKS[name]
+        feature = graph.add(FramePose(f"{name}_pose", frame=spec.frame, mask=spec.mask))
+        placement = data.oMf[model.getFrameId(spec.frame)]
+        feature.reference_position.set(placement.translation.copy())
+        feature.reference_orientation.set(pin.Quaternion(placement.rotation).coeffs().copy())  # xyzw
+        task = graph.add(Task(name))
+        task.weight.set(spec.weight)
+        task.kp.set(spec.kp)
+        task.kd.set(spec.kd)
+        graph.plug("robot.state", f"{name}_pose.robot")
+        graph.plug(f"{name}_pose.feature", f"{name}.feature")
+    graph.add(InverseDynamicsSolver("solver", model="talos", tasks=[*old.tasks, *names], contacts=list(old.contacts)))
+    graph.plug("robot.state", "solver.robot")
+    for name in (*old.tasks, *names):
+        graph.plug(f"{name}.equation", f"solver.{name}")
+    for name in old.contacts:
+        graph.plug(f"{name}.contact", f"solver.{name}")
+    graph.plug("solver.tau", "device.control")
 
 
 def stats(samples_us: np.ndarray) -> dict[str, float]:
@@ -53,93 +170,262 @@ def stats(samples_us: np.ndarray) -> dict[str, float]:
             "p99": float(np.percentile(samples_us, 99)), "mean": float(samples_us.mean())}
 
 
-def dgraph_tick(ticks: int, warmup: int = 200) -> dict[str, object]:
-    """Control-graph time per tick in the MuJoCo closed loop, and the loop's real-time factor."""
-    graph = talos_sway.build(tasks=("com_task", "posture_task"), record=False)
-    times: list[float] = []
-    tau = graph["solver"].tau
+def dgraph_tick(tasks: tuple[str, ...], ticks: int, warmup: int = 200) -> dict[str, object]:
+    """Control-graph time per tick in the MuJoCo closed loop, the loop's real-time factor, the load."""
+    graph = build(tasks)
+    times: list[int] = []
+    failures = [0]
+    solver = graph["solver"]
 
     def control(t: int) -> None:
         start = time.perf_counter_ns()
-        tau(t)
+        solver.tau(t)
         times.append(time.perf_counter_ns() - start)
+        failures[0] += solver.status(t) != 0
 
     graph["device"].before.add(control)
     graph.run(ticks=warmup, progress=False)
     times.clear()
+    failures[0] = 0
+    meter = calibration.BusyMeter().start()
     start = time.perf_counter()
     graph.run(ticks=ticks, progress=False)
     wall = time.perf_counter() - start
-    status = graph["solver"].solution.value.status
+    others = meter.stop()
     graph.close()
-    return {"tick_us": stats(np.array(times) / 1e3), "real_time_factor": ticks * graph.dt / wall,
-            "loop_us": wall / ticks * 1e6, "last_status": int(status), "fallen": bool(graph["device"].fallen.value)}
+    return {"tasks": list(tasks), "tick_us": stats(np.array(times) / 1e3), "real_time_factor": ticks * graph.dt / wall,
+            "loop_us": wall / ticks * 1e6, "qp_failures": failures[0], "fallen": bool(graph["device"].fallen.value),
+            "others_busy": others}
 
 
 def demo_real_time_factor(ticks: int) -> float:
-    """Real-time factor of the full demo graph (all tasks, recorder and 3D view, .rrd written)."""
-    import dgraph as dg
-
-    graph = dg.load(str(ROOT / "graphs" / "talos_sway.yaml"), {"recorder.rrd_path": "out/bench_talos_sway.rrd",
-                                                               "view.rrd_path": "out/bench_talos_sway.rrd"})
-    start = time.perf_counter()
-    with graph:
-        graph.run(ticks=ticks, progress=False)
-    return ticks * graph.dt / (time.perf_counter() - start)
-
-
-def tsid_tick(python: str, ticks: int) -> dict[str, object]:
-    """Run the TSID peer in its venv on the same task set; its JSON report."""
-    config = ROOT / "out" / "tsid_config.json"
-    config.parent.mkdir(exist_ok=True)
-    config.write_text(json.dumps(TSID_CONFIG))
-    out = subprocess.run([python, str(ROOT / "bench" / "peer_tsid.py"), "--ticks", str(ticks), "--config", str(config)],
-                         check=True, capture_output=True, text=True)
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    """Real-time factor of the full demo graph (all tasks, recorder and 3D view, .rrd written, closed)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        rrd = str(Path(tmp) / "talos_sway.rrd")
+        graph = dg.load(str(ROOT / "graphs" / "talos_sway.yaml"), {"recorder.rrd_path": rrd, "view.rrd_path": rrd})
+        start = time.perf_counter()
+        with graph:
+            graph.run(ticks=ticks, progress=False)
+        return ticks * graph.dt / (time.perf_counter() - start)
 
 
-def machine() -> str:
-    """CPU model, cores and Python version."""
-    model = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
-                  if line.startswith("model name")), platform.processor())
-    import os
+# -- TSID ----------------------------------------------------------------------------------------
+def tsid_config(tasks: tuple[str, ...]) -> dict[str, object]:
+    """The peer's config (peer_tsid.py) for the same task set."""
+    cfg = copy.deepcopy(TSID_BASE)
+    if "posture_task" not in tasks:
+        cfg["posture"] = None
+    if "waist_task" in tasks:
+        cfg["waist"] = TSID_WAIST
+    if "momentum_task" in tasks:
+        cfg["momentum"] = TSID_MOMENTUM
+    cfg["frames"] = [{"name": name, "frame": spec.frame, "mask": [int(c) for c in spec.mask], "weight": spec.weight,
+                      "kp": spec.kp, "kd": spec.kd, "local_frame": False}
+                     for name, spec in EXTRA_TASKS.items() if name in tasks]
+    return cfg
 
-    return f"{model}, {os.cpu_count()} vCPU, CPython {platform.python_version()}"
+
+def peer_env(unpinned: bool) -> dict[str, str]:
+    """The peer's environment: BLAS/OpenMP on one thread, or (``unpinned``) without those variables."""
+    if not unpinned:
+        return calibration.single_threaded_env()
+    return {k: v for k, v in os.environ.items() if k not in calibration.THREAD_VARIABLES}
+
+
+def tsid_tick(python: str, tasks: tuple[str, ...], ticks: int, unpinned: bool = False) -> dict[str, object]:
+    """Run the TSID peer in its venv on the same task set; its JSON report, and the load meanwhile."""
+    with tempfile.TemporaryDirectory() as tmp:
+        config = Path(tmp) / "tsid_config.json"
+        config.write_text(json.dumps(tsid_config(tasks)))
+        meter = calibration.BusyMeter().start()
+        out = subprocess.run([python, str(ROOT / "bench" / "peer_tsid.py"), "--ticks", str(ticks),
+                              "--config", str(config)], check=True, capture_output=True, text=True,
+                             env=peer_env(unpinned))
+        others = meter.stop()
+    return {**json.loads(out.stdout.strip().splitlines()[-1]), "others_busy": others}
+
+
+# -- summary -------------------------------------------------------------------------------------
+def summarise_side(runs: list[dict[str, object]]) -> dict[str, object]:
+    """Best round, anomalous rounds and p99 / median of one side of one set."""
+    medians = [r["tick_us"]["median"] for r in runs]
+    best = int(np.argmin(medians))
+    return {"medians_us": medians, "p99_us": [r["tick_us"]["p99"] for r in runs], "best_round": best + 1,
+            "best_median_us": medians[best], "best_p99_over_median": runs[best]["tick_us"]["p99"] / medians[best],
+            "anomalous_rounds": [i + 1 for i, m in enumerate(medians) if m > ANOMALY_FACTOR * medians[best]]}
+
+
+def slope(points: dict[int, float]) -> float | None:
+    """Least-squares slope of y over x (None with fewer than two x values)."""
+    if len(points) < 2:
+        return None
+    return float(np.polyfit(list(points), list(points.values()), 1)[0])
+
+
+def summarise(results: dict[str, dict[str, list]], has_peer: bool) -> dict[str, object]:
+    """Per set: both sides' summaries and the best-round ratio; the cost of one more task per side."""
+    sets = {}
+    for name, sides in results.items():
+        entry = {"tasks": len(SETS[name]), "dgraph": summarise_side(sides["dgraph"])}
+        if has_peer:
+            entry["tsid"] = summarise_side(sides["tsid"])
+            entry["ratio"] = entry["dgraph"]["best_median_us"] / entry["tsid"]["best_median_us"]
+        sets[name] = entry
+    cost = {side: slope({len(SETS[n]): s[side]["best_median_us"] for n, s in sets.items()})
+            for side in ("dgraph", "tsid") if side == "dgraph" or has_peer}
+    return {"sets": sets, "task_cost_us": cost}
+
+
+# -- report --------------------------------------------------------------------------------------
+def print_set(name: str, sides: dict[str, list], entry: dict[str, object], cal: dict[str, object]) -> None:
+    """One markdown table for a set, and its summary lines."""
+    print(f"\n### {name} ({entry['tasks']} tasks: {', '.join(SETS[name])})\n")
+    print("| round | dgraph tick median µs | p99 | p99 / median | others busy | closed-loop RTF "
+          "| TSID tick median µs | p99 | others busy |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+    peers = sides.get("tsid") or [None] * len(sides["dgraph"])
+    for i, (ours, peer) in enumerate(zip(sides["dgraph"], peers, strict=True), 1):
+        t = ours["tick_us"]
+        peer_cols = (f"{peer['tick_us']['median']:.0f} | {peer['tick_us']['p99']:.0f} | {peer['others_busy']:.2f}"
+                     if peer else "- | - | -")
+        print(f"| {i} | {t['median']:.0f} | {t['p99']:.0f} | {t['p99'] / t['median']:.2f} | {ours['others_busy']:.2f} "
+              f"| {ours['real_time_factor']:.2f} | {peer_cols} |")
+    ours = entry["dgraph"]
+    line = (f"best rounds: dgraph {ours['best_median_us']:.0f} µs "
+            f"({calibration.in_loops(ours['best_median_us'] * 1e3, cal):.0f} calibration loops)")
+    if "tsid" in entry:
+        line += f", TSID {entry['tsid']['best_median_us']:.0f} µs; ratio {entry['ratio']:.2f}"
+    print(f"\n{line}; our p99 / median {ours['best_p99_over_median']:.2f}")
+    for side in ("dgraph", "tsid"):
+        if side in entry and entry[side]["anomalous_rounds"]:
+            print(f"ANOMALOUS {side} rounds (median > {ANOMALY_FACTOR}x the best): {entry[side]['anomalous_rounds']}")
+    failures = [r["qp_failures"] for r in sides["dgraph"]]
+    if any(failures) or any(r["fallen"] for r in sides["dgraph"]):
+        print(f"warning: our QP failed {failures} times per round, fallen {[r['fallen'] for r in sides['dgraph']]}")
+
+
+def print_scaling(summary: dict[str, object]) -> None:
+    """Tick against the number of tasks, and the slope, per side."""
+    sets = summary["sets"]
+    print("\n### Tick against the number of tasks (best rounds)\n")
+    print("| tasks | set | dgraph µs | TSID µs |\n|---:|---|---:|---:|")
+    for name, entry in sorted(sets.items(), key=lambda item: item[1]["tasks"]):
+        peer = f"{entry['tsid']['best_median_us']:.0f}" if "tsid" in entry else "-"
+        print(f"| {entry['tasks']} | {name} | {entry['dgraph']['best_median_us']:.0f} | {peer} |")
+    cost = ", ".join(f"{side} {value:.1f} µs" if value is not None else f"{side} - (needs two sets)"
+                     for side, value in summary["task_cost_us"].items())
+    print(f"\ncost of one more task (least-squares slope): {cost}")
+
+
+def verdict(ok: bool | None, text: str) -> tuple[str, str]:
+    """A (PASS|FAIL|SKIP, text) pair."""
+    return ("SKIP" if ok is None else "PASS" if ok else "FAIL", text)
+
+
+def acceptance(summary: dict[str, object], speedup: float | None) -> list[tuple[str, str]]:
+    """The issue's criteria, one verdict each."""
+    sets = summary["sets"]
+    anomalies = {f"{n} {side}": e[side]["anomalous_rounds"] for n, e in sets.items() for side in ("dgraph", "tsid")
+                 if side in e and e[side]["anomalous_rounds"]}
+    lines = [verdict(not anomalies, f"no anomalous round (median > {ANOMALY_FACTOR}x the side's best): "
+                     + (", ".join(f"{k} rounds {v}" for k, v in anomalies.items()) or "none"))]
+    for name in ("bench", "demo"):
+        ratio = sets.get(name, {}).get("ratio")
+        lines.append(verdict(None if ratio is None else ratio <= MAX_RATIO,
+                             f"{name}: best-round tick median dgraph / TSID "
+                             f"{'-' if ratio is None else f'{ratio:.2f}'} <= {MAX_RATIO}"))
+    spread = {n: sets[n]["dgraph"]["best_p99_over_median"] for n in ("bench", "demo") if n in sets}
+    lines.append(verdict(all(v <= MAX_P99_OVER_MEDIAN for v in spread.values()) if spread else None,
+                         f"our p99 / median <= {MAX_P99_OVER_MEDIAN} (best rounds): "
+                         + (", ".join(f"{n} {v:.2f}" for n, v in spread.items()) or "-")))
+    cost = summary["task_cost_us"]["dgraph"]
+    lines.append(verdict(None if cost is None else cost <= MAX_TASK_COST_US,
+                         f"cost of one more task {'-' if cost is None else f'{cost:.1f}'} µs <= {MAX_TASK_COST_US} µs"))
+    lines.append(verdict(None if speedup is None else speedup >= MIN_SPEEDUP,
+                         f"full demo real-time factor, this tree / base: "
+                         f"{'- (use --base COMMIT)' if speedup is None else f'{speedup:.2f}'} >= {MIN_SPEEDUP}"))
+    return lines
+
+
+def versions() -> dict[str, str]:
+    """Our side's package versions."""
+    return {name: md.version(name) for name in ("numpy", "pin", "proxsuite", "mujoco", "scipy")}
+
+
+# -- main ----------------------------------------------------------------------------------------
+def parse_args() -> argparse.Namespace:
+    """Command line."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ticks", type=int, default=3000, help="timed ticks per round and side")
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--sets", nargs="+", choices=list(SETS), default=list(SETS))
+    parser.add_argument("--peer", default=str(ROOT / ".venv-tsid" / "bin" / "python"), help="TSID venv python")
+    parser.add_argument("--unpinned-peer", action="store_true",
+                        help="run TSID with the OpenMP/BLAS thread defaults (reproduces the anomaly)")
+    parser.add_argument("--base", help="also compare the full demo's real-time factor with this commit")
+    parser.add_argument("--json", type=Path, default=None, help="write the numbers to this file")
+    return parser.parse_args()
+
+
+def measure(args: argparse.Namespace, has_peer: bool) -> tuple[dict[str, dict[str, list]], list[float]]:
+    """Warm-up round, then the interleaved rounds; per set and side the runs, and the demo RTFs."""
+    dgraph_tick(SETS["bench"], min(args.ticks, 500))
+    if has_peer:
+        tsid_tick(args.peer, SETS["bench"], min(args.ticks, 500), args.unpinned_peer)
+    results = {name: {"dgraph": [], "tsid": []} if has_peer else {"dgraph": []} for name in args.sets}
+    demo_rtf = []
+    for round_index in range(1, args.rounds + 1):
+        for name in args.sets:
+            results[name]["dgraph"].append(dgraph_tick(SETS[name], args.ticks))
+            if has_peer:
+                results[name]["tsid"].append(tsid_tick(args.peer, SETS[name], args.ticks, args.unpinned_peer))
+        demo_rtf.append(demo_real_time_factor(min(args.ticks, 3000)))
+        print(f"round {round_index} done", file=sys.stderr, flush=True)
+    return results, demo_rtf
 
 
 def main() -> None:
-    """Interleave dgraph and TSID rounds; print a markdown table."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--ticks", type=int, default=5000)
-    parser.add_argument("--rounds", type=int, default=2)
-    parser.add_argument("--peer", default=str(ROOT / ".venv-tsid" / "bin" / "python"), help="TSID venv python")
-    parser.add_argument("--json", default=None, help="write the numbers to this file")
-    args = parser.parse_args()
-    rounds = []
-    for _ in range(args.rounds):
-        ours = dgraph_tick(args.ticks)
-        peer = tsid_tick(args.peer, args.ticks) if Path(args.peer).exists() else None
-        rounds.append({"dgraph": ours, "tsid": peer})
-    demo_rtf = demo_real_time_factor(min(args.ticks, 3000))
-    print(f"machine: {machine()}; {args.ticks} ticks per round, {args.rounds} rounds\n")
-    print("| round | dgraph tick median µs | p99 | TSID tick median µs | p99 | ratio (median) | "
-          "closed-loop RTF |")
-    print("|---|---|---|---|---|---|---|")
-    for i, r in enumerate(rounds, 1):
-        ours, peer = r["dgraph"], r["tsid"]
-        peer_cols = (f"{peer['tick_us']['median']:.0f} | {peer['tick_us']['p99']:.0f} | "
-                     f"{ours['tick_us']['median'] / peer['tick_us']['median']:.2f}") if peer else "- | - | -"
-        print(f"| {i} | {ours['tick_us']['median']:.0f} | {ours['tick_us']['p99']:.0f} | {peer_cols} | "
-              f"{ours['real_time_factor']:.2f} |")
-    print(f"\nfull demo graph (4 tasks, recorder + 3D view to .rrd): real-time factor {demo_rtf:.2f}")
-    if rounds[0]["tsid"]:
-        p = rounds[0]["tsid"]
-        print(f"TSID: tsid {p['versions']['tsid']}, pinocchio {p['versions']['pinocchio']}, nVar {p['nVar']}, "
-              f"nEq {p['nEq']}, nIn {p['nIn']}, solver {p['solver']}")
+    """Calibrate, measure, summarise, print tables and the acceptance lines, write the JSON."""
+    args = parse_args()
+    has_peer = Path(args.peer).exists()
+    cal_start = calibration.calibrate()
+    results, demo_rtf = measure(args, has_peer)
+    speedup = None
+    if args.base:
+        import compare_commits
+
+        comparison = compare_commits.compare(args.base, compare_commits.WORKTREE, min(args.ticks, 3000), args.rounds)
+        speedup = comparison["ratio_head_over_base"]
+    cal_end = calibration.calibrate()
+    summary = summarise(results, has_peer)
+    print(calibration.calibration_line(cal_start))
+    print(calibration.calibration_line(cal_end))
+    print(f"{args.ticks} ticks per round and side, {args.rounds} rounds after a warm-up round; "
+          f"BLAS/OpenMP threads: ours 1, TSID {'defaults' if args.unpinned_peer else 1}")
+    for name in args.sets:
+        print_set(name, results[name], summary["sets"][name], cal_start)
+    print_scaling(summary)
+    bench_rtf = [round(r["real_time_factor"], 2) for r in results.get("bench", {}).get("dgraph", [])]
+    print(f"\nclosed-loop real-time factor of the bench graph (control graph + MuJoCo) per round: {bench_rtf}")
+    print(f"full demo graph (4 tasks, recorder + 3D view to .rrd): real-time factor per round "
+          f"{[round(r, 2) for r in demo_rtf]}, median {float(np.median(demo_rtf)):.2f}")
+    peer_versions = next(iter(results.values()))["tsid"][0]["versions"] if has_peer else None
+    if peer_versions:
+        print(f"TSID: tsid {peer_versions['tsid']}, pinocchio {peer_versions['pinocchio']}, solver HQuadProgFast")
+    else:
+        print(f"TSID: not run ({args.peer} not found: bash bench/setup_tsid.sh)")
+    criteria = acceptance(summary, speedup)
+    print("\n## Acceptance\n")
+    for status, text in criteria:
+        print(f"{status}  {text}")
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps({"machine": machine(), "rounds": rounds, "demo_rtf": demo_rtf},
-                                              indent=1))
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps({
+            "calibration": {"start": cal_start, "end": cal_end}, "versions": versions(), "tsid_versions": peer_versions,
+            "ticks": args.ticks, "rounds": args.rounds, "unpinned_peer": args.unpinned_peer,
+            "sets": {name: list(SETS[name]) for name in args.sets}, "results": results, "summary": summary,
+            "demo_real_time_factor": demo_rtf, "speedup_vs_base": speedup, "base": args.base,
+            "acceptance": [{"status": s, "criterion": t} for s, t in criteria]}, indent=1))
 
 
 if __name__ == "__main__":
