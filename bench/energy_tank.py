@@ -17,13 +17,12 @@
 from __future__ import annotations
 
 import argparse
-import platform
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import yaml
+from calibration import calibrate, calibration_line
 
 import dgraph as dg
 from dgraph.files import loads, parse
@@ -170,7 +169,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--plots", type=Path, default=None, help="run both scenarios and write PNG plots here")
     args = parser.parse_args()
-    print(f"# {platform.processor() or platform.machine()}, Python {sys.version.split()[0]}")
+    print(f"# {calibration_line(calibrate())}")
     print("| round | variant | control tick median / p99 (µs) | tank stage 1 | QP assembly + solve | fell |")
     print("|---|---|---|---|---|---|")
     for round_ in range(1, args.rounds + 1):

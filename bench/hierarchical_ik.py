@@ -29,6 +29,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from calibration import calibrate, calibration_line
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "entities" / "hierarchy"))
@@ -81,6 +82,8 @@ def main() -> None:
     args = parser.parse_args()
     cpu = next((line.split(":", 1)[1].strip() for line in subprocess.run(
         ["lscpu"], capture_output=True, text=True).stdout.splitlines() if line.startswith("Model name")), "?")
+    cal = calibrate()
+    print(calibration_line(cal))
     print(f"machine: {cpu}, {platform.python_implementation()} {platform.python_version()}, "
           f"numpy {np.__version__}; {args.ticks} ticks x {args.rounds} rounds")
     variants = {"table_4_1": (True, False), "table_4_1_every_level_proxqp": (False, False),
@@ -97,7 +100,8 @@ def main() -> None:
     print(f"thesis Table 4.10 (SoT IK, C++): average {THESIS_AVERAGE_MS[0]}-{THESIS_AVERAGE_MS[1]} ms per loop")
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps({"machine": cpu, "ticks": args.ticks, "results": results}, indent=1))
+        args.json.write_text(json.dumps({"machine": cpu, "calibration": cal, "ticks": args.ticks,
+                                          "results": results}, indent=1))
 
 
 if __name__ == "__main__":

@@ -50,6 +50,7 @@ from pathlib import Path
 
 import numpy as np
 import proxsuite
+from calibration import calibrate, calibration_line
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
@@ -379,6 +380,7 @@ def main() -> None:
     parser.add_argument("--json", type=Path, help="write the numbers to this file")
     args = parser.parse_args()
 
+    cal = calibrate()
     start = time.perf_counter()
     problems, info = record(args.ticks, args.warmup)
     record_s = time.perf_counter() - start
@@ -433,6 +435,7 @@ def main() -> None:
     print(f"- time: recording {record_s:.1f} s, replay {replay_s:.1f} s.")
     print(f"- machine: {env['cpu']} ({env['cpus']} CPUs), Python {env['python']}, proxsuite {env['proxsuite']}, "
           f"numpy {env['numpy']}, pinocchio {env['pinocchio']}")
+    print(f"- {calibration_line(cal)}")
     print(f"- command: `{command}`")
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
@@ -443,7 +446,7 @@ def main() -> None:
             "exact_reference": None if exact is None else {"solver": "daqp", "failures": exact["failures"]},
             "closed_loop_max_abs_delta_tau": closed_loop_delta,
             "fallen": info["fallen"], "ticks_with_torque_at_limit": at_limit, "record_s": record_s,
-            "replay_s": replay_s, "machine": env, "command": command}, indent=2))
+            "replay_s": replay_s, "machine": env, "calibration": cal, "command": command}, indent=2))
         print(f"- wrote {args.json}")
 
 

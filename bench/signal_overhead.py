@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
 import statistics
 import subprocess
 import sys
@@ -26,6 +25,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
+from calibration import calibrate, calibration_line
 from topologies import TOPOLOGIES
 
 REPEATS = 7
@@ -77,7 +77,7 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[10, 100, 1000, 10000])
     parser.add_argument("--peer", help="python interpreter with pydrake, for the Drake chain")
     args = parser.parse_args()
-    print(f"# signal overhead, {platform.processor() or platform.machine()}, Python {platform.python_version()}")
+    print(f"# signal overhead; {calibration_line(calibrate())}")
     print(f"# median of {REPEATS} repeats; µs")
     rows = []
     for name, build in TOPOLOGIES.items():
