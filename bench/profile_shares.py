@@ -26,7 +26,8 @@ Each sample goes to the category of its innermost *project* frame (a file under 
 - the rest of ``dgraph/`` (loop, graph, entity, device hooks): **loop / graph**.
 
 The table gives samples, the share of the loop and, from the wall time of the profiled ticks
-(slightly inflated by the sampling), the approximate µs per tick of each category.
+(inflated by the sampling: py-spy pauses the process for each sample), the approximate µs per
+tick of each category; the calibration line is printed from before and after the profile.
 """
 
 from __future__ import annotations
@@ -204,8 +205,10 @@ def main() -> None:
         by_category, by_function = shares(parse(raw.read_text()))
     if not by_category:
         raise SystemExit("no sample inside the profiled loop (too few ticks for the sampling rate?)")
+    cal_end = calibrate()
     us_per_tick = timing["wall_s"] / timing["ticks"] * 1e6
     print(calibration_line(cal))
+    print(calibration_line(cal_end))
     print(f"demo loop (graphs/talos_sway.yaml, recorder + 3D view), {args.ticks} ticks after {args.warmup}, "
           f"py-spy at {args.rate} Hz: {us_per_tick:.0f} µs per tick under the profiler "
           f"(real-time factor {1e3 / us_per_tick:.2f})\n")
@@ -216,8 +219,8 @@ def main() -> None:
         print(f"- {name}: {100 * n / total:.1f} %")
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps({"calibration": cal, "ticks": args.ticks, "warmup": args.warmup,
-                                         "rate_hz": args.rate, "us_per_tick": us_per_tick,
+        args.json.write_text(json.dumps({"calibration": {"start": cal, "end": cal_end}, "ticks": args.ticks,
+                                         "warmup": args.warmup, "rate_hz": args.rate, "us_per_tick": us_per_tick,
                                          "samples": dict(by_category), "functions": dict(by_function)}, indent=1))
 
 

@@ -26,7 +26,8 @@ Ticks:
   its own kinematically integrated state (no simulator); eiquadprog (HQuadProgFast).
 - **real-time factor**: simulated time / wall time of the closed loop of the ``bench`` graph
   (control graph + MuJoCo step, no recording), and of the full demo (``graphs/talos_sway.yaml``
-  with its recorder and 3D view writing an .rrd into a temporary directory), once per round.
+  with its recorder and 3D view writing an .rrd into a temporary directory, timed after 200
+  warm-up ticks, closing included: bench/compare_commits.py's run), once per round.
 
 Rounds: one warm-up round of both sides (not counted), then ``--rounds`` rounds, each running
 every set on our side then on TSID's. Per set and side: each round's median and p99, and the
@@ -66,6 +67,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 sys.path.insert(0, str(ROOT / "graphs"))
 
 import calibration  # noqa: E402
+import compare_commits  # noqa: E402
 
 calibration.single_threaded()  # before numpy, Pinocchio and proxsuite read the thread variables
 
@@ -199,14 +201,8 @@ def dgraph_tick(tasks: tuple[str, ...], ticks: int, warmup: int = 200) -> dict[s
 
 
 def demo_real_time_factor(ticks: int) -> float:
-    """Real-time factor of the full demo graph (all tasks, recorder and 3D view, .rrd written, closed)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        rrd = str(Path(tmp) / "talos_sway.rrd")
-        graph = dg.load(str(ROOT / "graphs" / "talos_sway.yaml"), {"recorder.rrd_path": rrd, "view.rrd_path": rrd})
-        start = time.perf_counter()
-        with graph:
-            graph.run(ticks=ticks, progress=False)
-        return ticks * graph.dt / (time.perf_counter() - start)
+    """Real-time factor of the full demo (bench/compare_commits.py's run of this tree: recorder, 3D view, .rrd)."""
+    return float(compare_commits.run_demo(ROOT, ticks, warmup=200)["real_time_factor"])
 
 
 # -- TSID ----------------------------------------------------------------------------------------
@@ -392,8 +388,6 @@ def main() -> None:
     results, demo_rtf = measure(args, has_peer)
     speedup = None
     if args.base:
-        import compare_commits
-
         comparison = compare_commits.compare(args.base, compare_commits.WORKTREE, min(args.ticks, 3000), args.rounds)
         speedup = comparison["ratio_head_over_base"]
     cal_end = calibration.calibrate()
