@@ -39,9 +39,10 @@ at the start and the end of the run, and in calibration loops.
 
 **Threads, and the first-round anomaly.** libtsid.so and Pinocchio's bindings (and proxsuite on
 our side) link libgomp. With the OpenMP defaults, TSID's tick runs parallel regions with a second
-thread that spins between them (half a vCPU in ``top -H`` even on a quiet machine). On 2 vCPUs,
-as soon as another process holds the other vCPU, each parallel region waits for that thread to
-be scheduled again: TSID's median goes from ~0.2 ms to 4-12 ms, p99 20-45 ms. What was busy was
+thread that spins between them (30-50 % of a vCPU in ``top -H``). On 2 vCPUs, as soon as
+another process holds the other vCPU, each parallel region waits for that thread to be scheduled
+again: TSID's p99 goes from ~0.3 ms to 10-50 ms and its median, in some rounds, from ~0.2 ms to
+several ms (docs/benchmarks.md has the measurements). What was busy was
 other jobs on the shared machine (another engineer's tests or a busy loop), not this script: it
 sleeps in ``subprocess.run`` while the peer runs. A first round is simply the likeliest to
 overlap a job started at the same time. So both sides run with ``OMP_NUM_THREADS``,
