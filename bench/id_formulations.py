@@ -126,9 +126,9 @@ def _new_qp(n: int, n_eq: int, n_in: int, box: bool = False):
 
 
 class Eliminated:
-    """The library's formulation: :meth:`InverseDynamicsQP.assemble`, then its ProxQP run
-    :meth:`InverseDynamicsQP.run` (what :meth:`~InverseDynamicsQP.solve` does without the
-    finiteness check and the result objects)."""
+    """The library's formulation: :meth:`InverseDynamicsQP.assemble`, then the ProxQP problem of
+    its workspace *with* the torque-limit rows (the library solves without them unless a limit
+    binds; here the formulations are compared with the limits as rows on every tick)."""
 
     name = "eliminated (library)"
 
@@ -145,15 +145,16 @@ class Eliminated:
         self.ws = self.lib.assemble(p.mass_matrix, p.bias_forces, p.tasks, p.contacts)
 
     def solve(self) -> None:
-        self.lib.run(self.ws, self.ws.latest)
+        self.qp = self.ws.limited_qp(self.lib)
+        self.qp.solve(self.ws.full, None)  # no tick: warm-started from the previous problem's answer
 
     def recover(self, p: Problem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        x = self.ws.qp.results.x.copy()
-        tau = self.ws.C[-self.na:] @ x + p.bias_forces[self.nu:]
+        x = self.qp.qp.results.x.copy()
+        tau = self.ws.torque_rows @ x + p.bias_forces[self.nu:]
         return x[:self.nv], x[self.nv:], tau
 
     def result(self) -> tuple[str, int]:
-        info = self.ws.qp.results.info
+        info = self.qp.qp.results.info
         return info.status.name, int(info.iter)
 
 
@@ -331,7 +332,7 @@ def exact_reference(problems: list[Problem], nv: int, nu: int, effort_limit: np.
         exact["failures"] += int(exitflag != 1)
         exact["a"].append(x[:nv])
         exact["f"].append(x[nv:])
-        exact["tau"].append(ws.C[-(nv - nu):] @ x + p.bias_forces[nu:])
+        exact["tau"].append(ws.torque_rows @ x + p.bias_forces[nu:])
     return exact
 
 
