@@ -387,9 +387,14 @@ class State(Output):
                                       entity=self.entity.name, signal=self.name)
         return self._value
 
-    def stage(self, value: Any) -> None:
-        """Check and hold ``value`` as the next state (raises :class:`SpecError` here, not at commit)."""
-        self._staged = _coerce(self, value)
+    def stage(self, value: Any, copy: bool = True) -> None:
+        """Check and hold ``value`` as the next state (raises :class:`SpecError` here, not at commit).
+
+        ``copy=False`` keeps a float array of the declared shape as it is (still checked for
+        NaN): for a caller that hands over an array of its own that it never writes again, such
+        as the result of a gather (a device's sensors), it saves a copy per state per tick.
+        """
+        self._staged = _coerce(self, value, copy)
 
     def commit(self, t: int) -> None:
         """Publish the staged value as the state at tick ``t``; invalidate everything downstream."""
@@ -542,10 +547,14 @@ class Input(Signal):
         return self._source.time if self._source is not None else self._set_time
 
 
-def _coerce(sig: Signal, value: Any) -> Any:
+def _coerce(sig: Signal, value: Any, copy: bool = True) -> Any:
     """``sig.spec.coerce`` with the error attributed to the signal's entity and name (a float
-    array of exactly the declared shape takes the fast path, without building the name)."""
-    array = exact_float_copy(sig.spec, value)
+    array of exactly the declared shape, or a float for a float scalar, takes the fast path,
+    without building the name)."""
+    spec = sig.spec
+    if type(value) is float and spec.dtype == "float" and spec.shape == () and value == value:
+        return value
+    array = exact_float_copy(spec, value, copy)
     if array is not None:
         return array
     try:

@@ -152,13 +152,14 @@ _KIND = {"float": "f", "int": "i", "bool": "b"}
 _FLOAT64 = np.dtype(np.float64)
 
 
-def exact_float_copy(spec: Spec, value: Any) -> np.ndarray | None:
+def exact_float_copy(spec: Spec, value: Any, copy: bool = True) -> np.ndarray | None:
     """The fast path that signals take before :meth:`Spec.coerce`: a float64 array of exactly
-    the declared (non-scalar) shape of a float spec, without NaN, gives a copy; anything else
-    (even an equivalent value) gives None, and the general path converts it or raises."""
+    the declared (non-scalar) shape of a float spec, without NaN, gives a copy (or itself, with
+    ``copy=False``); anything else (even an equivalent value) gives None, and the general path
+    converts it or raises."""
     if (type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == spec.shape
             and spec.dtype == "float" and value.ndim):
-        array = value.copy()
+        array = value.copy() if copy else value
         if not _has_nan(array):
             return array
     return None

@@ -492,3 +492,20 @@ def test_a_holding_periodic_output_keeps_its_upstream_idle(graph):
         assert reader.s(graph.t) == 2.0 * (graph.t - graph.t % 5) + graph.t
         graph.step()
     assert reader.s.count == 10 and held.y.count == 2 and upstream.y.count == 2
+
+
+def test_staging_without_a_copy_keeps_the_array_and_still_refuses_nan(graph):
+    class Holder(dg.Entity):
+        has_state = True
+        x = dg.State(shape=(2,), initial=np.zeros(2))
+
+    x = graph.add(Holder("h")).x
+    fresh = np.array([1.0, 2.0])
+    x.stage(fresh, copy=False)
+    x.commit(1)
+    assert x.value is fresh
+    x.stage(fresh)
+    x.commit(2)
+    assert x.value is not fresh and x.value.tolist() == [1.0, 2.0]
+    with pytest.raises(dg.SpecError, match="NaN"):
+        x.stage(np.array([np.nan, 0.0]), copy=False)
