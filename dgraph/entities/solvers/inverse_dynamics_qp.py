@@ -67,6 +67,10 @@ _PROXQP_STATUS = {
 }
 
 
+_largest = np.maximum.reduce
+"""The largest entry of an array (the ufunc itself: ``ndarray.max`` adds microseconds of wrapping)."""
+
+
 def proxqp_status(results: object) -> int:
     """The module's status code for ProxQP ``results`` (``NOT_FINITE`` for a "solved" answer
     with non-finite entries)."""
@@ -466,7 +470,7 @@ class InverseDynamicsQP:
         excess = ws.tau_excess
         np.abs(tau, out=excess)
         excess -= self.effort_limit
-        return bool(excess.max() > self.eps_abs)
+        return bool(_largest(excess) > self.eps_abs)
 
     def _failed(self, status: int, iterations: int, contacts: list[ContactConstraint], start: float) -> QPSolution:
         return QPSolution(np.zeros(self.nv), None, [np.zeros(c.n_forces) for c in contacts], status, iterations,
