@@ -14,6 +14,7 @@ from dgraph.entities.estimators.leg_odometry import (
     default_imu_frame,
     frame_id,
     matrix_to_quat,
+    quat_to_rows,
     standing_configuration,
 )
 from dgraph.entities.robot.robot_state import load_model
@@ -47,7 +48,7 @@ class FloatingBaseEstimator(dg.Entity):
     1. Orientation: ``R_WB = R_WI R_BI^T`` (``R_WI`` from the IMU quaternion; the IMU is on the
        torso, so ``R_BI`` depends on the torso joints).
     2. Angular velocity (gyro ``w_g`` in ``I``): ``w_g = R_BI^T (w_B + w_BI)``, so
-       ``w_B = R_BI w_g - w_BI`` (base frame, Pinocchio's ``v[3:6]``); ``w_W = R_WB w_B``.
+       ``w_B = R_BI w_g - w_BI`` (base frame, Pinocchio's ``v[3:6]``).
     3. Contacts: normal force ``f_k = e_z . (R_WB R_BS_k f_S_k)`` (sensor force along the world
        vertical); ``c_k = f_k > f_on or (a_k and f_k > f_off)`` (hysteresis), ``a_k`` the state
        "foot k was in contact at t-1 and has an anchor ``p_k``".
@@ -56,10 +57,11 @@ class FloatingBaseEstimator(dg.Entity):
        weights); with none, ``p_WB`` is the prediction state ``p~``. A foot touching down
        (``c_k and not a_k``) is anchored at ``p_k = p_WB + R_WB r_BF_k``, consistent with
        ``p_WB``; a foot off the ground is ignored.
-    5. Kinematic velocity (feet in contact do not move):
-       ``0 = v_WB + w_W x (R_WB r_BF_k) + R_WB rd_BF_k``, so
-       ``v_kin = -sum w_k (w_W x (R_WB r_BF_k) + R_WB rd_BF_k)``, carried to the IMU point:
-       ``v_I,kin = v_kin + w_W x (R_WB r_BI) + R_WB rd_BI``.
+    5. Kinematic velocity (feet in contact do not move): the velocity of a point ``X`` fixed on
+       the robot is ``v_WB + R_WB u_X`` with ``u_X = w_B x r_BX + rd_BX`` (in ``B``); a foot in
+       contact gives ``0 = v_WB + R_WB u_F_k`` and the IMU point moves at
+       ``v_I = v_WB + R_WB u_I``, so ``v_I,kin = R_WB (u_I - sum w_k u_F_k)`` (weights of (4)
+       over the feet in contact).
     6. Complementary filter at the IMU point (where the accelerometer measures, so no lever
        arm is neglected), with ``a_W = R_WI a_acc + g`` (``a_acc`` the proper acceleration,
        ``g = (0, 0, -9.81)``), ``x`` the predicted IMU velocity state,
@@ -74,9 +76,13 @@ class FloatingBaseEstimator(dg.Entity):
        yet: ``v_I = v_I,kin`` (``alpha = 0``) if a foot touches, else ``x(0)`` (the robot
        starts at ``v0 = 0``); from then on the prediction is kept, in flight too, so a robot
        that lands keeps the velocity it fell with.
-       Base velocity: ``v_WB = v_I - w_W x (R_WB r_BI) - R_WB rd_BI``.
+       Base velocity: ``v_WB = v_I - R_WB u_I``.
     7. Outputs (Pinocchio conventions): ``q = [p_WB, quat_xyzw(R_WB), q_j]``,
-       ``v = [R_WB^T v_WB, w_B, qd_j]``.
+       ``v = [R_WB^T v_WB, w_B, qd_j]`` with ``R_WB^T v_WB = R_WB^T v_I - u_I``.
+
+    The 3-vector algebra is done in Python floats (a numpy call costs more than the dozen
+    multiplications of a rotation); the frames come from one pass of
+    :class:`~dgraph.entities.estimators.leg_odometry.RelativeKinematics`.
 
     Tick transition (``prepare_state`` at ``t`` stages, ``commit_state`` publishes at ``t + 1``;
     flags and anchors only when they change):
@@ -147,19 +153,20 @@ class FloatingBaseEstimator(dg.Entity):
             raise dg.ParamError(f"{entity}: contact_force_off ({self.contact_force_off}) must not exceed "
                                 f"contact_force_on ({self.contact_force_on})", entity=self.name)
         self.imu_frame_name = self.imu_frame or default_imu_frame(model)
-        self._foot = [frame_id(model, f, self.name, "foot_frames", entity) for f in self.foot_frames]
-        self._ft = [frame_id(model, f, self.name, "ft_frames", entity) for f in self.ft_frames]
-        self._imu = frame_id(model, self.imu_frame_name, self.name, "imu_frame", entity)
+        for param in ("foot_frames", "ft_frames"):
+            for name in getattr(self, param):
+                frame_id(model, name, self.name, param, entity)
+        frame_id(model, self.imu_frame_name, self.name, "imu_frame", entity)
         if self.q0 is not None and self.q0.shape != (self.nq,):
             raise dg.ParamError(f"{entity}: q0 has shape {self.q0.shape}, expected ({self.nq},)", entity=self.name)
-        self._kinematics = RelativeKinematics(model, dict.fromkeys([*self._foot, *self._ft, self._imu]))
-        self._pin = self._kinematics._pin
-        self._lwa = self._kinematics._lwa
-        self._gravity = np.array(model.gravity.linear, dtype=float)
+        names = [*self.foot_frames, self.imu_frame_name, *self.ft_frames]
+        self._kinematics = RelativeKinematics(model, names)
+        self._names = names  # left, right, IMU, sensors left, right
+        self._gravity = np.array(model.gravity.linear, dtype=float).tolist()
+        self._alpha_dt, self._alpha = None, 0.0
 
     def setup(self) -> None:
-        """Index the per-foot ports (left, right)."""
-        self._ft_in = (self.ft_left_ankle, self.ft_right_ankle)
+        """Index the per-foot states (left, right)."""
         self._anchor = (self.anchor_left, self.anchor_right)
         self._anchored = (self.anchored_left, self.anchored_right)
         self._pending: list[dg.State] = []
@@ -183,69 +190,90 @@ class FloatingBaseEstimator(dg.Entity):
     def estimate(self, t: int) -> Any:
         """Everything estimated at ``t`` (an ``Estimate``: q, v, contacts, anchors, next states)."""
         q_j, qd_j = self.encoder_position(t), self.encoder_velocity(t)
-        pin, kin, lwa = self._pin, self._kinematics, self._lwa
-        model, data = kin.model, kin.data
+        kin = self._kinematics
         kin.forward(q_j, qd_j)  # frames relative to the base, in B (see RelativeKinematics)
-        imu = pin.updateFramePlacement(model, data, self._imu)
-        imu_motion = pin.getFrameVelocity(model, data, self._imu, lwa)
-        left, right = self._foot
-        # rows: r_BF_left, r_BF_right, r_BI, then their velocities rd_BF_left, rd_BF_right, rd_BI
-        frames = np.array([pin.updateFramePlacement(model, data, left).translation,
-                           pin.updateFramePlacement(model, data, right).translation, imu.translation,
-                           pin.getFrameVelocity(model, data, left, lwa).linear,
-                           pin.getFrameVelocity(model, data, right, lwa).linear, imu_motion.linear])
-        r_bi = imu.rotation
-
-        quat = pin.Quaternion(self.imu_orientation(t))  # coefficients x, y, z, w
-        r_wi = quat.normalized().toRotationMatrix()
-        r_wb = r_wi.dot(r_bi.T)                                             # (1)
-        w_b = r_bi.dot(self.imu_angular_velocity(t)) - imu_motion.angular  # (2)
-        # w_W x (R_WB r) + R_WB rd = R_WB (w_B x r + rd): velocities relative to the base in B
-        # (rows: r^T S(w_B)^T = (w_B x r)^T), then every row rotated to the world at once
-        frames[3:] += frames[:3].dot(pin.skew(w_b).T)
-        world = frames.dot(r_wb.T)  # R_WB r_BF_k, R_WB r_BI, the feet's terms of (5), the lever arm
-        vertical = r_wb[2]                                                  # e_z in B (a row of R_WB)
-
-        forces, contacts, anchored = [0.0, 0.0], [False, False], [False, False]
-        for k in range(2):                                                  # (3)
-            force = self._ft_in[k](t)[:3]
-            f_n = float(vertical.dot(pin.updateFramePlacement(model, data, self._ft[k]).rotation.dot(force)))
-            anchored[k] = bool(self._anchored[k](t))
-            forces[k] = f_n
-            contacts[k] = contact_hysteresis(f_n, anchored[k], self.contact_force_on, self.contact_force_off)
-
-        staying = [k for k in range(2) if contacts[k] and anchored[k]]
-        anchors = [self._anchor[k](t) if k in staying else None for k in range(2)]
-        if len(staying) == 2:                                               # (4)
-            total = forces[0] + forces[1]
-            weights = np.array([forces[0] / total, forces[1] / total])
-            p_wb = weights.dot(np.array(anchors) - world[:2])
-        elif staying:
-            k = staying[0]
-            p_wb = anchors[k] - world[k]
+        left, right, imu, ft_left, ft_right = self._names
+        r_bi = kin.rotation[imu].tolist()
+        r_wi = quat_to_rows(self.imu_orientation(t).tolist())
+        r_wb = _times_transpose(r_wi, r_bi)                                      # (1)
+        w_b = _minus(_times(r_bi, self.imu_angular_velocity(t).tolist()), kin.angular_velocity(imu))  # (2)
+        forces = (_dot(r_wb[2], _times(kin.rotation[ft_left].tolist(), self.ft_left_ankle(t)[:3].tolist())),
+                  _dot(r_wb[2], _times(kin.rotation[ft_right].tolist(), self.ft_right_ankle(t)[:3].tolist())))  # (3)
+        anchored = (self.anchored_left(t), self.anchored_right(t))
+        on, off = self.contact_force_on, self.contact_force_off
+        contacts = [contact_hysteresis(forces[0], anchored[0], on, off),
+                    contact_hysteresis(forces[1], anchored[1], on, off)]
+        r_bf = (kin.translation[left].tolist(), kin.translation[right].tolist())
+        p_wb, anchors = self._position(t, (_times(r_wb, r_bf[0]), _times(r_wb, r_bf[1])), forces, contacts,
+                                       anchored)                                 # (4)
+        u_i = _cross_add(w_b, kin.translation[imu].tolist(), kin.velocity(imu))  # (5)
+        if contacts[0] or contacts[1]:
+            u_f = (_cross_add(w_b, r_bf[0], kin.velocity(left)), _cross_add(w_b, r_bf[1], kin.velocity(right)))
+            v_i = self._fused_velocity(t, r_wb, u_i, u_f, forces, contacts)     # (5), (6)
         else:
-            p_wb = np.array(self.position_prediction(t), dtype=float)
-        for k in range(2):
+            v_i = self.velocity_prediction(t).tolist()
+        v_wb = _minus(v_i, _times(r_wb, u_i))                                    # (6)
+        q = np.empty(self.nq)                                                    # (7)
+        q[:7] = p_wb + matrix_to_quat(r_wb)
+        q[7:] = q_j
+        v = np.empty(self.nv)
+        v[:6] = _minus(_transpose_times(r_wb, v_i), u_i) + w_b
+        v[6:] = qd_j
+        return Estimate(q, v, contacts, anchors, np.array(v_wb), *self._predictions(t, r_wi, v_i, p_wb, v_wb))
+
+    def _position(self, t: int, r_wf: tuple[list[float], list[float]], forces: tuple[float, float],
+                  contacts: list[bool], anchored: tuple[bool, bool]) -> tuple[list[float], list[np.ndarray | None]]:
+        """(4): ``p_WB`` (floats) from ``R_WB r_BF_k`` (``r_wf``), and every foot's anchor (the state
+        while it stays, a new one at touch-down, None when off)."""
+        stay_left, stay_right = contacts[0] and anchored[0], contacts[1] and anchored[1]
+        anchors = [self.anchor_left(t) if stay_left else None, self.anchor_right(t) if stay_right else None]
+        if stay_left and stay_right:
+            w_left = forces[0] / (forces[0] + forces[1])
+            w_right = forces[1] / (forces[0] + forces[1])
+            (a0, a1, a2), (b0, b1, b2) = anchors[0].tolist(), anchors[1].tolist()
+            (l0, l1, l2), (r0, r1, r2) = r_wf
+            p_wb = [w_left * (a0 - l0) + w_right * (b0 - r0), w_left * (a1 - l1) + w_right * (b1 - r1),
+                    w_left * (a2 - l2) + w_right * (b2 - r2)]
+        elif stay_left or stay_right:
+            k = 0 if stay_left else 1
+            p_wb = _minus(anchors[k].tolist(), r_wf[k])
+        else:
+            p_wb = self.position_prediction(t).tolist()
+        for k in (0, 1):
             if contacts[k] and anchors[k] is None:
-                anchors[k] = p_wb + world[k]
+                anchors[k] = np.array([p + r for p, r in zip(p_wb, r_wf[k], strict=True)])
+        return p_wb, anchors
 
-        lever = world[5]                                                    # v_I - v_WB
-        x = self.velocity_prediction(t)
-        if contacts[0] or contacts[1]:                                      # (5)
-            total = (forces[0] if contacts[0] else 0.0) + (forces[1] if contacts[1] else 0.0)
-            weights = np.array([forces[0] / total if contacts[0] else 0.0, forces[1] / total if contacts[1] else 0.0])
-            v_i_kin = lever - weights.dot(world[3:5])
-            alpha = complementary_alpha(self.cutoff_frequency, self.dt) if self.velocity_initialised(t) else 0.0
-            v_i = alpha * x + (1.0 - alpha) * v_i_kin                       # (6)
-        else:
-            v_i = np.array(x, dtype=float)
-        v_wb = v_i - lever
-        a_w = r_wi.dot(self.imu_linear_acceleration(t)) + self._gravity
+    def _fused_velocity(self, t: int, r_wb: list[list[float]], u_i: list[float],
+                        u_f: tuple[list[float], list[float]], forces: tuple[float, float],
+                        contacts: list[bool]) -> list[float]:
+        """(5) and (6): the IMU velocity ``v_I`` (floats), with at least one foot in contact."""
+        f_left = forces[0] if contacts[0] else 0.0
+        f_right = forces[1] if contacts[1] else 0.0
+        w_left, w_right = f_left / (f_left + f_right), f_right / (f_left + f_right)
+        (l0, l1, l2), (r0, r1, r2) = u_f
+        kinematic = _times(r_wb, [u_i[0] - (w_left * l0 + w_right * r0), u_i[1] - (w_left * l1 + w_right * r1),
+                                  u_i[2] - (w_left * l2 + w_right * r2)])
+        if not self.velocity_initialised(t):
+            return kinematic
+        alpha = self._filter_weight()
+        (x0, x1, x2), (k0, k1, k2) = self.velocity_prediction(t).tolist(), kinematic
+        return [alpha * x0 + (1.0 - alpha) * k0, alpha * x1 + (1.0 - alpha) * k1, alpha * x2 + (1.0 - alpha) * k2]
 
-        q = np.concatenate([p_wb, matrix_to_quat(r_wb), q_j])               # (7)
-        v = np.concatenate([v_wb.dot(r_wb), w_b, qd_j])
+    def _predictions(self, t: int, r_wi: list[list[float]], v_i: list[float], p_wb: list[float],
+                     v_wb: list[float]) -> tuple[np.ndarray, np.ndarray]:
+        """The next filter states: ``x(t + 1) = v_I + dt a_W`` (6), ``p~(t + 1) = p_WB + dt v_WB``."""
+        dt, (g0, g1, g2) = self.dt, self._gravity
+        a0, a1, a2 = _times(r_wi, self.imu_linear_acceleration(t).tolist())
+        return (np.array([v_i[0] + dt * (a0 + g0), v_i[1] + dt * (a1 + g1), v_i[2] + dt * (a2 + g2)]),
+                np.array([p_wb[0] + dt * v_wb[0], p_wb[1] + dt * v_wb[1], p_wb[2] + dt * v_wb[2]]))
+
+    def _filter_weight(self) -> float:
+        """``alpha`` of (6) for the current ``dt`` (computed again only if ``dt`` changes)."""
         dt = self.dt
-        return Estimate(q, v, contacts, anchors, v_wb, v_i + dt * a_w, p_wb + dt * v_wb)
+        if dt != self._alpha_dt:
+            self._alpha_dt, self._alpha = dt, complementary_alpha(self.cutoff_frequency, dt)
+        return self._alpha
 
     @dg.output(shape=("nq",), depends=("estimate",))
     def q(self, t: int) -> Any:
@@ -301,5 +329,40 @@ class FloatingBaseEstimator(dg.Entity):
         for state in self._pending:
             state.commit(t_next)
         self._pending = []
+
+def _times(r: list[list[float]], x: list[float]) -> list[float]:
+    """``R x`` for a 3x3 matrix given by its rows and a 3-vector (Python floats, as every helper
+    below: cheaper than numpy's cost per call on 3-vectors)."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r
+    x0, x1, x2 = x
+    return [r00 * x0 + r01 * x1 + r02 * x2, r10 * x0 + r11 * x1 + r12 * x2, r20 * x0 + r21 * x1 + r22 * x2]
+
+
+def _transpose_times(r: list[list[float]], x: list[float]) -> list[float]:
+    """``R^T x`` for a 3x3 matrix given by its rows and a 3-vector."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r
+    x0, x1, x2 = x
+    return [r00 * x0 + r10 * x1 + r20 * x2, r01 * x0 + r11 * x1 + r21 * x2, r02 * x0 + r12 * x1 + r22 * x2]
+
+
+def _times_transpose(a: list[list[float]], b: list[list[float]]) -> list[list[float]]:
+    """``A B^T`` for 3x3 matrices given by their rows (row ``i`` is ``B a_i``)."""
+    return [_times(b, row) for row in a]
+
+
+def _cross_add(w: list[float], r: list[float], d: list[float]) -> list[float]:
+    """``w x r + d`` for 3-vectors."""
+    return [w[1] * r[2] - w[2] * r[1] + d[0], w[2] * r[0] - w[0] * r[2] + d[1], w[0] * r[1] - w[1] * r[0] + d[2]]
+
+
+def _minus(a: list[float], b: list[float]) -> list[float]:
+    """``a - b`` for 3-vectors."""
+    return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+
+
+def _dot(a: list[float], b: list[float]) -> float:
+    """``a . b`` for 3-vectors."""
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
 
 __all__ = ["Estimate", "FloatingBaseEstimator"]

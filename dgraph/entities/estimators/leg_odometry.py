@@ -9,7 +9,8 @@ frame ``Y`` in frame ``X`` and ``r_XY`` the position of the origin of ``Y`` in `
 at the identity and at rest, one first-order ``forwardKinematics`` from the joint encoders
 ``(q_j, qd_j)`` gives, for every frame ``X`` of interest, ``R_BX``, ``r_BX`` and its velocity
 relative to the base expressed in ``B``: ``d/dt r_BX = J_X^lin(q_j) qd_j`` and
-``w_BX = J_X^ang(q_j) qd_j`` (no Jacobian is formed).
+``w_BX = J_X^ang(q_j) qd_j`` (no Jacobian is formed). The quaternion helpers work on Python
+floats, which the estimators use for their 3-vector algebra.
 """
 
 from __future__ import annotations
@@ -60,35 +61,50 @@ def standing_configuration(model: Any, foot_frames: Sequence[str]) -> np.ndarray
     return q
 
 
+def quat_to_rows(q: Sequence[float]) -> list[list[float]]:
+    """Rows of the rotation matrix of a quaternion ``[x, y, z, w]`` (normalised here), in Python floats.
+
+    With ``(x, y, z, w)`` of unit norm: ``R = I + 2 w [u]x + 2 [u]x^2``, ``u = (x, y, z)``, i.e.
+    ``R_00 = 1 - 2 (y^2 + z^2)``, ``R_01 = 2 (x y - z w)``, ... (Eigen's expression order).
+    """
+    x, y, z, w = q
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = x / norm, y / norm, z / norm, w / norm
+    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+    twx, twy, twz, txx, txy, txz, tyy, tyz, tzz = tx * w, ty * w, tz * w, tx * x, ty * x, tz * x, ty * y, tz * y, tz * z
+    return [[1.0 - (tyy + tzz), txy - twz, txz + twy],
+            [txy + twz, 1.0 - (txx + tzz), tyz - twx],
+            [txz - twy, tyz + twx, 1.0 - (txx + tyy)]]
+
+
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrix of a quaternion ``[x, y, z, w]`` (normalised here)."""
-    x, y, z, w = (q / math.sqrt(float(q @ q))).tolist()  # Python floats: cheaper than numpy scalars
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    """Rotation matrix (an array) of a quaternion ``[x, y, z, w]`` (normalised here)."""
+    return np.array(quat_to_rows(np.asarray(q, dtype=float).tolist()))
 
 
-def matrix_to_quat(r: np.ndarray) -> np.ndarray:
-    """Quaternion ``[x, y, z, w]`` (``w >= 0``) of a rotation matrix (Shepperd's method)."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r.tolist()
+def matrix_to_quat(r: Any) -> list[float]:
+    """Quaternion ``[x, y, z, w]`` (``w >= 0``) of a rotation matrix (Shepperd's method).
+
+    ``r`` is an array or nested rows; Python floats throughout (a few dozen operations, cheaper
+    than as many numpy calls on 3-vectors).
+    """
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r.tolist() if isinstance(r, np.ndarray) else r
     trace = r00 + r11 + r22
     if trace > 0:
         s = 2.0 * math.sqrt(1.0 + trace)
-        q = [(r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s, 0.25 * s]
+        q = ((r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s, 0.25 * s)
     elif r00 > r11 and r00 > r22:
         s = 2.0 * math.sqrt(1.0 + r00 - r11 - r22)
-        q = [0.25 * s, (r01 + r10) / s, (r02 + r20) / s, (r21 - r12) / s]
+        q = (0.25 * s, (r01 + r10) / s, (r02 + r20) / s, (r21 - r12) / s)
     elif r11 > r22:
         s = 2.0 * math.sqrt(1.0 + r11 - r00 - r22)
-        q = [(r01 + r10) / s, 0.25 * s, (r12 + r21) / s, (r02 - r20) / s]
+        q = ((r01 + r10) / s, 0.25 * s, (r12 + r21) / s, (r02 - r20) / s)
     else:
         s = 2.0 * math.sqrt(1.0 + r22 - r00 - r11)
-        q = [(r02 + r20) / s, (r12 + r21) / s, 0.25 * s, (r10 - r01) / s]
-    out = np.array(q)
-    out /= math.sqrt(float(out @ out))
-    return -out if out[3] < 0 else out
+        q = ((r02 + r20) / s, (r12 + r21) / s, 0.25 * s, (r10 - r01) / s)
+    x, y, z, w = q
+    scale = (-1.0 if w < 0 else 1.0) / math.sqrt(x * x + y * y + z * z + w * w)
+    return [x * scale, y * scale, z * scale, w * scale]
 
 
 def contact_hysteresis(force: float, previous: bool, on: float, off: float) -> bool:
@@ -105,52 +121,84 @@ def complementary_alpha(cutoff: float, dt: float) -> float:
     return tau / (tau + dt)
 
 
-class FrameMotion:
-    """Placement and velocity of a frame relative to the base, in the base frame."""
-
-    __slots__ = ("angular", "linear", "rotation", "translation")
-
-    def __init__(self, rotation: np.ndarray, translation: np.ndarray, linear: np.ndarray, angular: np.ndarray):
-        self.rotation = rotation          # R_BX
-        self.translation = translation    # r_BX
-        self.linear = linear              # d/dt r_BX (base frame)
-        self.angular = angular            # w_BX, angular velocity of X relative to B, in B
-
-
 class RelativeKinematics:
     """Frames of a free-flyer model relative to its base, from the joint encoders.
 
-    One ``pinocchio.forwardKinematics(model, data, q, v)`` with ``q = [0, 0, 0, 0, 0, 0, 1, q_j]``
-    and ``v = [0_6, qd_j]`` (base at the identity and at rest) on a private ``Data``, then
-    ``updateFramePlacement`` and ``getFrameVelocity(..., LOCAL_WORLD_ALIGNED)`` per frame.
+    Built for the frames named in ``frames``: every joint that moves none of them (outside the
+    supports of their parent joints: on TALOS the arms, grippers and head when the frames are
+    on the legs and the torso) is locked (``pinocchio.buildReducedModel``), which changes
+    nothing for these frames and halves the work. :meth:`forward` runs one first-order
+    ``pinocchio.forwardKinematics(model, data, q, v)`` on that model with
+    ``q = [0, 0, 0, 0, 0, 0, 1, q_j]`` and ``v = [0_6, qd_j]`` (base at the identity and at
+    rest, ``q_j``, ``qd_j`` restricted to the joints kept) and ``updateFramePlacement`` of the
+    frames. Then, for a frame ``X`` on joint ``j`` at the fixed placement ``r_jX`` (in ``j``):
+    :attr:`rotation` and :attr:`translation` hold ``R_BX`` and ``r_BX``, and
+    :meth:`velocity` gives ``d/dt r_BX = R_Bj (v_j + w_j x r_jX)`` and ``w_BX = R_Bj w_j``
+    (``v_j``, ``w_j`` the joint's velocity in its own frame, ``data.v[j]``), both in ``B``.
+
+    :attr:`rotation`, :attr:`translation` and the joint quantities are numpy arrays that share
+    Pinocchio's memory in ``data`` (read once here, updated in place by every pass: no
+    conversion per read), so they are valid as long as this object lives.
     """
 
-    def __init__(self, model: Any, frames: Sequence[int]):
+    def __init__(self, model: Any, frames: Sequence[str]):
         import pinocchio as pin
 
-        self._pin = pin
-        self.model = model
-        self.data = model.createData()
-        self.frames = list(frames)
-        self._q = pin.neutral(model)
+        kept = {j for name in frames for j in model.supports[model.frames[model.getFrameId(name)].parentJoint]}
+        locked = [j for j in range(2, model.njoints) if j not in kept]
+        self.model = reduced = pin.buildReducedModel(model, locked, pin.neutral(model)) if locked else model
+        self.data = data = reduced.createData()
+        ids = [reduced.getFrameId(name) for name in frames]
+        self._ids = ids
+        self.rotation = {name: data.oMf[i].rotation for name, i in zip(frames, ids, strict=True)}
+        self.translation = {name: data.oMf[i].translation for name, i in zip(frames, ids, strict=True)}
+        self._motion = {}
+        for name, i in zip(frames, ids, strict=True):
+            j = reduced.frames[i].parentJoint
+            self._motion[name] = (data.oMi[j].rotation, data.v[j].linear, data.v[j].angular,
+                                  reduced.frames[i].placement.translation.tolist())
+        joints = sorted(kept - {0, 1})
+        self._q_joints = _selection([i for j in joints for i in range(model.idx_qs[j] - 7,
+                                                                        model.idx_qs[j] - 7 + model.nqs[j])])
+        self._v_joints = _selection([i for j in joints for i in range(model.idx_vs[j] - 6,
+                                                                        model.idx_vs[j] - 6 + model.nvs[j])])
+        self._q = pin.neutral(reduced)
         self._q[:7] = [0, 0, 0, 0, 0, 0, 1]
-        self._v = np.zeros(model.nv)
-        self._lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        self._v = np.zeros(reduced.nv)
+        self._pin = pin
 
     def forward(self, q_joints: np.ndarray, v_joints: np.ndarray) -> None:
-        """Only the forward kinematics: read the frames with ``pinocchio.updateFramePlacement``
-        and ``getFrameVelocity(..., LOCAL_WORLD_ALIGNED)`` on ``model`` and ``data``."""
-        self._q[7:] = q_joints
-        self._v[6:] = v_joints
-        self._pin.forwardKinematics(self.model, self.data, self._q, self._v)
-
-    def update(self, q_joints: np.ndarray, v_joints: np.ndarray) -> dict[int, FrameMotion]:
-        """Motion of every frame (by id) relative to the base, for joint positions and velocities."""
+        """The pass for joint positions ``q_joints`` (``q[7:]`` of the full model) and velocities
+        ``v_joints`` (``v[6:]``): forward kinematics, then the placements of the frames."""
         pin, model, data = self._pin, self.model, self.data
-        self.forward(q_joints, v_joints)
-        out = {}
-        for fid in self.frames:
-            placement = pin.updateFramePlacement(model, data, fid)
-            motion = pin.getFrameVelocity(model, data, fid, self._lwa)
-            out[fid] = FrameMotion(placement.rotation, placement.translation, motion.linear, motion.angular)
-        return out
+        self._q[7:] = q_joints[self._q_joints]
+        self._v[6:] = v_joints[self._v_joints]
+        pin.forwardKinematics(model, data, self._q, self._v)
+        for i in self._ids:
+            pin.updateFramePlacement(model, data, i)
+
+    def velocity(self, name: str) -> list[float]:
+        """``d/dt r_BX = R_Bj (v_j + w_j x r_jX)`` of frame ``name`` (Python floats, in ``B``) after :meth:`forward`."""
+        rotation, linear, angular, (p0, p1, p2) = self._motion[name]
+        v0, v1, v2 = linear.tolist()
+        w0, w1, w2 = angular.tolist()
+        return _rotate(rotation, v0 + w1 * p2 - w2 * p1, v1 + w2 * p0 - w0 * p2, v2 + w0 * p1 - w1 * p0)
+
+    def angular_velocity(self, name: str) -> list[float]:
+        """``w_BX = R_Bj w_j`` of frame ``name`` (Python floats, in ``B``) after :meth:`forward`."""
+        rotation, _, angular, _ = self._motion[name]
+        return _rotate(rotation, *angular.tolist())
+
+
+def _rotate(rotation: np.ndarray, x: float, y: float, z: float) -> list[float]:
+    """``R (x, y, z)`` in Python floats."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation.tolist()
+    return [r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z, r20 * x + r21 * y + r22 * z]
+
+
+def _selection(indices: list[int]) -> slice | np.ndarray:
+    """A slice if ``indices`` are consecutive (a view, cheaper than a gather), else an index array."""
+    if not indices:
+        return slice(0, 0)
+    first, end = indices[0], indices[0] + len(indices)
+    return slice(first, end) if indices == list(range(first, end)) else np.array(indices, dtype=np.intp)

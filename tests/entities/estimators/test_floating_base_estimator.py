@@ -10,6 +10,7 @@ from synthetic_talos import DT, SENSORS, Lift, Playback, Trajectory, generate
 import dgraph as dg
 from dgraph.entities.estimators import FloatingBaseEstimator
 from dgraph.entities.estimators.leg_odometry import (
+    RelativeKinematics,
     complementary_alpha,
     contact_hysteresis,
     matrix_to_quat,
@@ -215,6 +216,46 @@ def test_quaternion_helpers_round_trip(rng):
         assert np.allclose(r, pin.Quaternion(quat).toRotationMatrix())
         back = matrix_to_quat(r)
         assert np.allclose(back, quat if quat[3] >= 0 else -quat)
+
+
+def test_quaternion_of_a_matrix_in_every_branch_of_shepperds_method():
+    # trace > 0, then the largest diagonal entry first, second, third (rotations by pi about x, y, z)
+    for axis in (np.zeros(3), [np.pi, 0.0, 0.0], [0.0, np.pi, 0.0], [0.0, 0.0, np.pi]):
+        r = pin.exp3(np.asarray(axis, dtype=float) + 0.1 * np.array([0.3, -0.2, 0.1]))
+        quat = np.array(matrix_to_quat(r))
+        assert quat[3] >= 0 and np.linalg.norm(quat) == pytest.approx(1.0, abs=1e-15)
+        np.testing.assert_allclose(quat_to_matrix(quat), r, atol=1e-14)
+        assert np.array_equal(matrix_to_quat(r.tolist()), matrix_to_quat(r))  # rows or an array
+
+
+@pytest.mark.parametrize("frames", [
+    ["left_sole_link", "right_sole_link", "imu_link", "leg_left_6_joint", "leg_right_6_joint"],  # the estimator's
+    ["left_sole_link", "rgbd_rgb_optical_frame", "gripper_right_fingertip_1_link"],  # offset on every axis; the
+    # joints kept are not consecutive in q (gathered)
+])
+def test_relative_kinematics_is_the_full_models_pass_with_the_base_at_rest(frames, rng):
+    model = FloatingBaseEstimator("probe").pin_model
+    data = model.createData()
+    kin = RelativeKinematics(model, frames)
+    kept = {j for f in frames for j in model.supports[model.frames[model.getFrameId(f)].parentJoint]}
+    assert kin.model.njoints == len(kept) < model.njoints  # the joints moving none of the frames are locked
+    for _ in range(20):
+        q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
+        q[:7] = [0, 0, 0, 0, 0, 0, 1]
+        v = rng.normal(size=model.nv)
+        v[:6] = 0.0
+        kin.forward(q[7:], v[6:])
+        pin.forwardKinematics(model, data, q, v)
+        for name in frames:
+            frame = model.getFrameId(name)
+            placement = pin.updateFramePlacement(model, data, frame)
+            motion = pin.getFrameVelocity(model, data, frame, pin.LOCAL_WORLD_ALIGNED)
+            # the arrays share Pinocchio's memory: every pass updates them in place
+            np.testing.assert_allclose(kin.rotation[name], placement.rotation, rtol=0, atol=1e-14)
+            np.testing.assert_allclose(kin.translation[name], placement.translation, rtol=0, atol=1e-14)
+            np.testing.assert_allclose(kin.velocity(name), motion.linear, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(kin.angular_velocity(name), motion.angular, rtol=0, atol=1e-12)
+    assert np.abs(v[6:]).max() > 1.0 and np.abs(motion.linear).max() > 0.1  # not trivially at rest
 
 
 def test_graph_file_builds_and_saves_the_estimator(tmp_path, sway):
