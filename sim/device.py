@@ -60,6 +60,25 @@ class MujocoDevice(dg.Device):
     Torques are clipped to the URDF effort limits; ``joint_torque`` reports what was applied.
     Vectors of actuated joints are in Pinocchio's order of ``q[7:]`` / ``v[6:]``.
 
+    A non-finite command never reaches MuJoCo and does not stop the run: when the torque computed
+    from the inputs at ``t`` (``control``, and in position mode ``feedforward_torque`` and
+    ``velocity_reference``) is not finite, the step applies the last valid command instead (torque
+    mode: the last finite ``control``; position mode: the last valid ``(control,
+    velocity_reference, feedforward_torque)``, its PD law computed on the state at ``t``) or, if
+    no command was ever valid, zero torque (torque mode) or a hold of the joints where they were
+    when the fault began (position mode: target ``q_j(t)``, no velocity reference, no
+    feed-forward). The state ``control_fault`` (int, stamped ``t + 1`` like ``joint_torque``)
+    counts the consecutive ticks whose command was replaced, 0 when the command was applied;
+    like ``fallen`` it is staged only when it changes. Non-finite wrench inputs are disturbances,
+    not commands: they still raise a ``DGraphError`` (the tick fails, every state stays at ``t``).
+
+    Inputs: ``control`` (na), in position mode ``feedforward_torque`` and ``velocity_reference``
+    (na, default zeros), ``wrench_<body>`` (6, world frame, at the body's CoM) for each of
+    ``wrench_bodies``. States: ``q``, ``v``, ``imu_orientation``, ``imu_angular_velocity``,
+    ``imu_linear_acceleration``, ``encoder_position``, ``encoder_velocity``, ``ft_left_ankle``,
+    ``ft_right_ankle``, ``ft_left_wrist``, ``ft_right_wrist``, ``joint_torque``,
+    ``contact_force_total``, ``sim_time``, ``fallen``, ``control_fault``.
+
     Force/torque sensors (6: force then torque, N and N m, in the sensor frame, torque about the
     sensor origin) report the wrench that the child side (foot or hand) exerts on the parent side
     (leg or arm): standing still, an ankle force along the sole normal is about +(weight carried
@@ -110,6 +129,8 @@ class MujocoDevice(dg.Device):
     contact_force_total = dg.State(shape=(3,), doc="sum of the contact forces the scene exerts on the robot, world")
     sim_time = dg.State(shape=(), doc="MuJoCo time, s")
     fallen = dg.State(shape=(), dtype="bool", doc="base height below fall_height")
+    control_fault = dg.State(shape=(), dtype="int", doc="consecutive ticks whose non-finite command was replaced "
+                             "by the last valid one (0: the command was applied)")
 
     # -- construction -----------------------------------------------------------------------
     def configure(self) -> None:
@@ -163,7 +184,6 @@ class MujocoDevice(dg.Device):
         self._pending = False
         self._warning_counts = [0, 0, 0]
         jm = self.joint_map
-        self._qpos_joints, self._qvel_joints = jm.qpos_joints, jm.qvel_joints
         self._ctrl_index, self._actuated_index = jm.ctrl_index, jm.actuated_index
         self._lower = -m.actuator_ctrlrange[self._actuated_index, 1]
         self._upper = m.actuator_ctrlrange[self._actuated_index, 1]
@@ -198,7 +218,8 @@ class MujocoDevice(dg.Device):
         self._torque_mode = self.control_mode == "torque"
         self._kp, self._kd = self._gains["kp"], self._gains["kd"]
         self._timestep = float(m.opt.timestep)
-        self._fallen_staged = False
+        self._fallen_staged = self._fault_staged = False
+        self._held = self._held_next = None
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._frames: list[np.ndarray] = []
         self._next_frame = 0
@@ -228,26 +249,44 @@ class MujocoDevice(dg.Device):
         self._pending = False
         self._sync_warnings()
         self._stage_all(self._contact_force(), everything=True)
+        self.control_fault.stage(0)
         for sig in self._states():
             sig.commit(0)
         self._fallen_staged = False
+        self._held = self._held_next = None
 
     def _states(self) -> list[dg.State]:
         return [s for s in self.ports.values() if isinstance(s, dg.State)]
 
     # -- the tick ---------------------------------------------------------------------------
-    def _torque(self, t: int) -> np.ndarray:
-        """Joint torques (actuated order) from the inputs at ``t``, before clipping."""
-        u = self.control(t)
+    def _torque(self, t: int) -> tuple[np.ndarray, bool]:
+        """Joint torques (actuated order, before clipping) for the step ``t -> t + 1``, and whether
+        the command at ``t`` was replaced: its torque was not finite (or so large that its square
+        overflows, beyond 1e154), so the last valid command is applied instead (see the class
+        docstring). The command kept for the next ticks is committed with the state."""
         if self._torque_mode:
-            tau = u
+            command = tau = self.control(t)
         else:
-            tau = (self.feedforward_torque(t) + self._kp * (u - self._qpos[self._qpos_joints])
-                   + self._kd * (self.velocity_reference(t) - self._qvel[self._qvel_joints]))
-        if not math.isfinite(np.dot(tau, tau)):  # inf or NaN (or absurd values beyond 1e154)
-            raise dg.DGraphError(f"{self.name}: non-finite joint torque at tick {t} (control_mode "
-                                 f"{self.control_mode}): {tau}", entity=self.name, signal="control")
-        return tau
+            command = (self.control(t), self.feedforward_torque(t), self.velocity_reference(t))
+            tau = self._pd(command)
+        if math.isfinite(np.dot(tau, tau)):
+            self._held_next = command
+            return tau, False
+        self._held_next = self._held if self._held is not None else self._hold_default()
+        return (self._held_next if self._torque_mode else self._pd(self._held_next)), True
+
+    def _hold_default(self) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The command held when none was ever valid: zero torque, or (position mode) the joints
+        held where they are (target ``q_j(t)``, no velocity reference, no feed-forward)."""
+        if self._torque_mode:
+            return np.zeros(self.na)
+        return self.encoder_position.value, np.zeros(self.na), np.zeros(self.na)
+
+    def _pd(self, command: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+        """Position mode: ``feedforward + kp (q* - q_j) + kd (v_ref - qd_j)`` on the state at ``t``."""
+        target, feedforward, velocity = command
+        return (feedforward + self._kp * (target - self.encoder_position.value)
+                + self._kd * (velocity - self.encoder_velocity.value))
 
     def prepare_state(self, t: int) -> None:
         """Apply the control at ``t``, step MuJoCo, check it, stage the state at ``t + 1``."""
@@ -257,7 +296,7 @@ class MujocoDevice(dg.Device):
         dt = self.dt
         if dt != self._timestep:
             m.opt.timestep = self._timestep = dt
-        tau = self._torque(t)
+        tau, replaced = self._torque(t)
         wrenches = [(body, self.signal(port)(t)) for body, port in self._wrenches] if self._wrenches else ()
         for (_, port), (_, wrench) in zip(self._wrenches, wrenches, strict=True):
             if not np.isfinite(wrench).all():
@@ -277,6 +316,10 @@ class MujocoDevice(dg.Device):
         mujoco.mj_step1(m, d)
         self._check(t)
         fallen = self._stage_all(contact_force)
+        fault = self.control_fault.value + 1 if replaced else 0
+        self._fault_staged = fault != self.control_fault.value
+        if self._fault_staged:
+            self.control_fault.stage(fault)
         if self.stop_on_fall and fallen:
             raise dg.DGraphError(f"{self.name}: the robot fell during tick {t} (base height "
                                  f"{d.qpos[self._base_z]:.3f} m < fall_height {self.fall_height} m "
@@ -301,6 +344,10 @@ class MujocoDevice(dg.Device):
         if self._fallen_staged:
             self.fallen.commit(t_next)
             self._fallen_staged = False
+        if self._fault_staged:
+            self.control_fault.commit(t_next)
+            self._fault_staged = False
+        self._held = self._held_next
         self._pending = False
 
     def _restore(self) -> None:

@@ -173,9 +173,136 @@ def test_divergence_raises_and_keeps_the_state():
     dev.wrench_base_link.set(np.zeros(6))  # the failed step is undone: the run goes on
     g.step()
     assert np.isfinite(dev.q.value).all() and abs(dev.q.value[2] - q[2]) < 1e-3
-    dev.control.set(np.full(32, np.inf))
-    with pytest.raises(dg.DGraphError, match="non-finite joint torque at tick 6"):
+    dev.wrench_arm_left_7_link.set([np.inf, 0.0, 0.0, 0.0, 0.0, 0.0])  # a disturbance, not a command: raises
+    with pytest.raises(dg.DGraphError, match="sim: non-finite wrench_arm_left_7_link at tick 6"):
         g.step()
+    assert g.t == 6 and dev.control_fault.value == 0
+
+
+class Commands(dg.Entity):
+    """A test source: row ``t`` of ``rows`` (NaN allowed: the graph's value checks are off)."""
+
+    rows = dg.Param(kind="object")
+
+    @dg.output(shape=(32,), depends=("t",))
+    def value(self, t):
+        return self.rows[min(t, len(self.rows) - 1)]
+
+
+def play(rows, mode="torque", port="control", ticks=None, fail_at=None, **inputs):
+    """Run a device fed ``rows`` on ``port`` (other inputs constant); per tick: q, v, ctrl, control_fault."""
+    g = dg.Graph(dt=0.001)
+    g.check_values = False  # let NaN through to the device, as an unchecked upstream entity would
+    dev = g.add(MujocoDevice("sim", control_mode=mode))
+    g.add(Commands("commands", rows=np.asarray(rows, dtype=float)))
+    g.plug("commands.value", f"sim.{port}")
+    for name, value in inputs.items():
+        dev.signal(name).set(value)
+    if fail_at is not None:
+        g.add(FailOnce("fail", at=fail_at))
+    seen = {"q": [], "v": [], "ctrl": [], "qpos": [], "fault": []}
+
+    def record(t):
+        for key, value in (("q", dev.q.value), ("v", dev.v.value), ("ctrl", dev.data.ctrl.copy()),
+                           ("qpos", dev.data.qpos.copy()), ("fault", dev.control_fault.value)):
+            seen[key].append(value)
+
+    dev.after.add(record)
+    ticks = len(rows) if ticks is None else ticks
+    if fail_at is not None:
+        with pytest.raises(RuntimeError, match="boom"):
+            g.run(ticks=ticks)
+        assert g.t == fail_at and dev.control_fault.time <= fail_at
+    g.run(ticks=ticks - g.t)
+    return {key: np.array(value) for key, value in seen.items()}
+
+
+def test_a_non_finite_torque_is_replaced_by_the_last_valid_one_and_counted():
+    rng = np.random.default_rng(1)
+    valid = rng.normal(0.0, 20.0, (40, 32))
+    rows = valid.copy()
+    rows[10] = np.nan                          # one bad tick
+    rows[20:23] = np.inf                       # three in a row
+    rows[30, 5] = np.nan                       # a single bad joint is a bad command
+    held = valid.copy()
+    held[10], held[20:23], held[30] = valid[9], valid[19], valid[29]
+    faulty, reference = play(rows), play(held)
+    expected = np.zeros(40, dtype=int)
+    expected[[10, 20, 21, 22, 30]] = [1, 1, 2, 3, 1]  # stamped t + 1: row k is the state after tick k
+    assert faulty["fault"].tolist() == expected.tolist()
+    np.testing.assert_array_equal(faulty["q"], reference["q"])  # exactly the held command was applied
+    np.testing.assert_array_equal(faulty["v"], reference["v"])
+    assert np.isfinite(faulty["ctrl"]).all() and np.isfinite(faulty["qpos"]).all()  # MuJoCo never saw one
+
+
+def test_without_any_valid_torque_yet_the_fallback_is_zero():
+    rows = np.zeros((30, 32))
+    rows[:5] = np.nan
+    rows[5:] = 30.0
+    faulty, reference = play(rows), play(np.where(np.isnan(rows), 0.0, rows))
+    assert faulty["fault"][:6].tolist() == [1, 2, 3, 4, 5, 0]
+    np.testing.assert_array_equal(faulty["q"], reference["q"])
+
+
+def test_position_mode_holds_the_last_valid_target_velocity_and_feedforward():
+    _, dev = standing_graph()
+    q_j, gravity = dev.q.value[7:].copy(), dev.feedforward_torque.value.copy()
+    targets = q_j + 0.02 * np.sin(np.arange(30)[:, None] * 0.3 + np.arange(32))
+    feedforward = np.tile(gravity, (30, 1)) + np.arange(30)[:, None]  # changes every tick
+    feedforward[12] = np.nan                   # the target is fine, the torque is not: the triple is held
+    feedforward_held = feedforward.copy()
+    feedforward_held[12] = feedforward[11]
+    faulty = play(feedforward, mode="position", port="feedforward_torque", control=targets[0])
+    reference = play(feedforward_held, mode="position", port="feedforward_torque", control=targets[0])
+    assert faulty["fault"].tolist() == [0] * 12 + [1] + [0] * 17
+    np.testing.assert_array_equal(faulty["q"], reference["q"])  # the PD of tick 12 is on the state at 12
+    # a bad target: the last valid (target, velocity reference, feed-forward), the PD on the current state
+    rows = targets.copy()
+    rows[12:15] = np.inf
+    held = targets.copy()
+    held[12:15] = targets[11]
+    faulty = play(rows, mode="position", feedforward_torque=gravity)
+    reference = play(held, mode="position", feedforward_torque=gravity)
+    assert faulty["fault"][11:16].tolist() == [0, 1, 2, 3, 0]
+    np.testing.assert_array_equal(faulty["q"], reference["q"])
+    assert np.isfinite(faulty["ctrl"]).all() and np.isfinite(faulty["qpos"]).all()
+
+
+def test_position_mode_without_any_valid_target_holds_the_joints_where_they_were():
+    q_j = MujocoDevice("probe", control_mode="position").q.value[7:]
+    rows = np.full((20, 32), np.nan)
+    faulty = play(rows, mode="position", feedforward_torque=np.zeros(32))
+    reference = play(np.tile(q_j, (20, 1)), mode="position", feedforward_torque=np.zeros(32))
+    assert faulty["fault"].tolist() == list(range(1, 21))
+    np.testing.assert_array_equal(faulty["q"], reference["q"])  # target q_j(0) latched, no feed-forward
+
+
+def test_the_command_held_is_the_last_one_applied_not_one_of_a_failed_tick():
+    runs = []
+    for fail in (False, True):
+        g = dg.Graph(dt=0.001)
+        dev = g.add(MujocoDevice("sim"))
+        dev.control.set(np.full(32, 10.0))
+        g.run(ticks=10)
+        if fail:
+            g.add(FailOnce("fail", at=10))
+            dev.control.set(np.full(32, -40.0))  # valid, but its step is undone by the failure
+            with pytest.raises(RuntimeError, match="boom"):
+                g.step()
+        dev.control.set(np.full(32, np.inf))
+        g.step()
+        assert dev.control_fault.value == 1
+        runs.append(dev.q.value)
+    np.testing.assert_array_equal(runs[1], runs[0])  # both held 10 N m, the torque applied at tick 9
+
+
+def test_a_failed_tick_during_a_fault_resumes_identically():
+    rows = np.full((40, 32), 10.0)
+    rows[15:25] = np.nan
+    straight, resumed = play(rows), play(rows, fail_at=20)  # the observer fails at tick 20, mid-fault
+    assert straight["fault"][19:26].tolist() == [5, 6, 7, 8, 9, 10, 0]
+    for key in ("q", "v", "fault"):
+        np.testing.assert_array_equal(resumed[key], straight[key], err_msg=key)
 
 
 class FailOnce(dg.Entity):
