@@ -330,6 +330,7 @@ class FloatingBaseEstimator(dg.Entity):
             state.commit(t_next)
         self._pending = []
 
+
 def _times(r: list[list[float]], x: list[float]) -> list[float]:
     """``R x`` for a 3x3 matrix given by its rows and a 3-vector (Python floats, as every helper
     below: cheaper than numpy's cost per call on 3-vectors)."""
