@@ -3,7 +3,7 @@
 TALOS stands in position mode (gravity feed-forward). For each tick, interleaved, it times the
 device's ``prepare_state`` + ``commit_state`` and, from the same MuJoCo state, the bare
 ``mj_step2`` + ``mj_step1`` (what ``prepare_state`` calls; together one ``mj_step``). It also times
-staging and committing the 15 states alone (dgraph's ``State.stage``/``commit``: shape, dtype and
+staging and committing its states alone (dgraph's ``State.stage``/``commit``: shape, dtype and
 NaN checks), to tell the device's own work from the signal layer's. Medians, in microseconds.
 """
 
@@ -23,7 +23,7 @@ _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 
 def measure(ticks: int = 3000) -> dict[str, float]:
     """Median times (µs) per tick: ``tick`` (prepare + commit), ``mujoco`` (step2 + step1),
-    ``overhead`` (their difference), ``stage_commit`` (the 15 states' stage + commit alone)."""
+    ``overhead`` (their difference), ``stage_commit`` (every state's stage + commit alone), ``states``."""
     import pinocchio as pin
 
     g = dg.Graph(dt=0.001, name="bench")
@@ -62,6 +62,7 @@ def measure(ticks: int = 3000) -> dict[str, float]:
     med = {name: float(np.median(v)) * 1e6 for name, v in (("tick", tick), ("mujoco", bare),
                                                            ("stage_commit", signals))}
     med["overhead"] = med["tick"] - med["mujoco"]
+    med["states"] = len(states)
     med["own"] = med["overhead"] - med["stage_commit"]
     return med
 
@@ -73,7 +74,8 @@ def main() -> None:
     args = parser.parse_args()
     med = measure(args.ticks)
     print(f"prepare+commit {med['tick']:.1f} us | mj_step2+mj_step1 {med['mujoco']:.1f} us | "
-          f"overhead {med['overhead']:.1f} us, of which 15 x State.stage+commit {med['stage_commit']:.1f} us "
+          f"overhead {med['overhead']:.1f} us, of which {med['states']:.0f} x State.stage+commit "
+          f"{med['stage_commit']:.1f} us "
           f"and the device's own work {med['own']:.1f} us (medians over {args.ticks} ticks)")
 
 

@@ -383,7 +383,7 @@ class MujocoDevice(dg.Device):
 
         ``fallen`` is staged only when it changes (or with ``everything``): its ``time`` is the
         tick of the change, like the estimator's contact flags. A few gathers with precomputed
-        index arrays; the encoder and F/T states are views of them (``stage`` copies).
+        index arrays; the encoder and F/T states are views of them.
         """
         qpos = self._qpos
         q = qpos[self._qpos_index]                      # JointMap.q_from_qpos
@@ -392,17 +392,18 @@ class MujocoDevice(dg.Device):
         sensors = self._sensordata[self._sensor_index]
         ft = sensors[10:]
         np.negative(ft, out=ft)  # MuJoCo reports the wrench the parent exerts on the child subtree
-        self.q.stage(q)
-        self.v.stage(v)
-        self.imu_orientation.stage(sensors[0:4])
-        self.imu_angular_velocity.stage(sensors[4:7])
-        self.imu_linear_acceleration.stage(sensors[7:10])
-        self.encoder_position.stage(q[7:])
-        self.encoder_velocity.stage(v[6:])
+        # every array is this tick's own (a gather, or a view of one) and never written again: no copies
+        self.q.stage(q, copy=False)
+        self.v.stage(v, copy=False)
+        self.imu_orientation.stage(sensors[0:4], copy=False)
+        self.imu_angular_velocity.stage(sensors[4:7], copy=False)
+        self.imu_linear_acceleration.stage(sensors[7:10], copy=False)
+        self.encoder_position.stage(q[7:], copy=False)
+        self.encoder_velocity.stage(v[6:], copy=False)
         for state, part in self._ft_parts:
-            state.stage(sensors[part])
-        self.joint_torque.stage(self._actuator_force[self._actuated_index])
-        self.contact_force_total.stage(contact_force)
+            state.stage(sensors[part], copy=False)
+        self.joint_torque.stage(self._actuator_force[self._actuated_index], copy=False)
+        self.contact_force_total.stage(contact_force, copy=False)
         self.sim_time.stage(self.data.time)
         fallen = bool(qpos[self._base_z] < self.fall_height)
         self._fallen_staged = everything or fallen != self.fallen.value
