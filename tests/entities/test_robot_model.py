@@ -116,6 +116,33 @@ def test_entity_outputs_share_one_pass_per_tick(model):
     assert robot.state.count == 2
 
 
+def test_each_quantity_is_computed_once_per_state_and_matches_pinocchio(model):
+    g = dg.Graph(dt=0.001)
+    robot = g.add(RobotModel("robot", frames=["left_sole_link"]))
+    q, v = random_state(model, 7)
+    robot.q.set(q)
+    robot.v.set(v)
+    state, fid = robot.state(0), model.getFrameId("left_sole_link")
+    assert state.com_jacobian is state.com_jacobian and state.frame(fid) is state.frame(fid, WORLD)
+    assert state.frame(fid, LOCAL) is not state.frame(fid, WORLD)
+    sole = state.frame(fid)  # the frame outputs hand out the state's arrays, not copies of them
+    assert robot.left_sole_link_jacobian(0) is sole.jacobian and robot.left_sole_link_drift(0) is sole.drift
+    assert robot.left_sole_link_placement(0) is sole.placement and robot.left_sole_link_velocity(0) is sole.velocity
+    data = model.createData()
+    pin.computeAllTerms(model, data, q, v)
+    pin.updateFramePlacements(model, data)
+    for ref in (WORLD, LOCAL):
+        frame = state.frame(fid, ref)
+        np.testing.assert_array_equal(frame.jacobian, pin.getFrameJacobian(model, data, fid, ref))
+        np.testing.assert_array_equal(frame.velocity, pin.getFrameVelocity(model, data, fid, ref).vector)
+        np.testing.assert_array_equal(frame.rotation, data.oMf[fid].rotation)
+        np.testing.assert_array_equal(frame.translation, data.oMf[fid].translation)
+    local_drift = pin.getFrameAcceleration(model, data, fid, LOCAL).vector
+    np.testing.assert_array_equal(state.frame(fid, LOCAL).drift, local_drift)
+    np.testing.assert_array_equal(sole.drift, pin.getFrameClassicalAcceleration(model, data, fid, WORLD).vector)
+    np.testing.assert_array_equal(state.centroidal_momentum, data.Ag @ v)
+
+
 def test_bad_frame_and_model_are_clear_errors():
     with pytest.raises(dg.ParamError, match="no frame 'nope'"):
         RobotModel("robot", frames=["nope"])
@@ -136,12 +163,16 @@ def test_a_state_kept_past_its_pass_raises_instead_of_answering_for_another(mode
     robot.q.set(q)
     robot.v.set(v)
     old = robot.state(0)
-    com, placement = old.com_position, old.frame_placement(model.getFrameId("left_sole_link"))
+    fid = model.getFrameId("left_sole_link")
+    com, placement, sole = old.com_position, old.frame_placement(fid), old.frame(fid)
     robot.q.set(pin.neutral(model))
     robot.state(0)  # a new pass on the shared data
-    with pytest.raises(dg.DGraphError, match="read after its Pinocchio data was reused"):
-        old.com_position
-    assert np.allclose(com, pin.centerOfMass(model, model.createData(), q))  # copies stay valid
+    for read in (lambda: old.com_jacobian, lambda: old.frame(fid, LOCAL), lambda: old.frame_placement(fid)):
+        with pytest.raises(dg.DGraphError, match="read after its Pinocchio data was reused"):
+            read()
+    assert old.com_position is com and old.frame(fid) is sole  # what it computed before is still its own
+    assert np.allclose(com, pin.centerOfMass(model, model.createData(), q))
+    assert np.array_equal(sole.placement, placement.homogeneous)
     data = model.createData()
     pin.framesForwardKinematics(model, data, q)
     assert np.allclose(placement.homogeneous, data.oMf[model.getFrameId("left_sole_link")].homogeneous)

@@ -8,23 +8,23 @@ import numpy as np
 import pinocchio as pin
 
 import dgraph as dg
-from dgraph.entities.robot.robot_state import RobotState, homogeneous, load_model
+from dgraph.entities.robot.robot_state import RobotState, load_model
 
 
 def _frame_outputs(frame: str, frame_id: int) -> dict[str, dg.Output]:
     """The four per-frame outputs of :class:`RobotModel`, read from the shared ``state``."""
 
     def placement(self: RobotModel, t: int) -> np.ndarray:
-        return homogeneous(self.state(t).frame_placement(frame_id))
+        return self.state(t).frame(frame_id).placement
 
     def velocity(self: RobotModel, t: int) -> np.ndarray:
-        return self.state(t).frame_velocity(frame_id)
+        return self.state(t).frame(frame_id).velocity
 
     def jacobian(self: RobotModel, t: int) -> np.ndarray:
-        return self.state(t).frame_jacobian(frame_id)
+        return self.state(t).frame(frame_id).jacobian
 
     def drift(self: RobotModel, t: int) -> np.ndarray:
-        return self.state(t).frame_drift(frame_id)
+        return self.state(t).frame(frame_id).drift
 
     nv = ("nv",)
     return {

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import functools
 import weakref
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -31,6 +33,39 @@ _OWNERS: weakref.WeakValueDictionary[int, RobotState] = weakref.WeakValueDiction
 alive, so an ``id`` is never reused while it is listed)."""
 
 
+class computed_once:
+    """A read-only attribute computed by ``method`` at the first read and then stored on the
+    instance (``functools.cached_property`` without its per-instance lock, which Python 3.11
+    takes at every first read: ~0.7 µs, and a state is new every tick)."""
+
+    def __init__(self, method: Callable[[Any], Any]):
+        self.method, self.name, self.__doc__ = method, method.__name__, method.__doc__
+
+    def __get__(self, instance: Any, owner: type | None = None) -> Any:
+        if instance is None:
+            return self
+        value = instance.__dict__[self.name] = self.method(instance)
+        return value
+
+
+@dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
+class FrameKinematics:
+    """One frame of one :class:`RobotState` in one convention (``WORLD`` or ``LOCAL``).
+
+    ``placement`` is the world placement ``oMf`` (4 x 4 homogeneous), ``rotation`` ``R`` and
+    ``translation`` ``p`` views of it; ``velocity`` the twist ``J v``, ``jacobian`` ``J`` (6 x nv)
+    and ``drift`` ``J_dot v`` in that convention (see the module docstring). Every array is this
+    tick's own: readers may keep them, and must not write into them.
+    """
+
+    placement: np.ndarray
+    rotation: np.ndarray
+    translation: np.ndarray
+    velocity: np.ndarray
+    jacobian: np.ndarray
+    drift: np.ndarray
+
+
 class RobotState:
     """Kinematics and dynamics of ``model`` at ``(q, v)``, computed once.
 
@@ -38,7 +73,8 @@ class RobotState:
     CoM and its Jacobian, centroidal momentum matrix). Its forward pass leaves in ``data.a`` the
     body accelerations at ``a = 0``, so frame accelerations read from it, and the CoM
     acceleration computed from it, are the drifts ``J_dot v`` (checked by finite differences).
-    Frame quantities are computed on request from that data (a few µs each).
+    Every other quantity is computed from that data at its first read and kept (a copy owned by
+    this state, shared by every reader of the tick): each is computed at most once per state.
     """
 
     def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray):
@@ -49,19 +85,19 @@ class RobotState:
         pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
         self.mass_matrix = data.M.copy()  # Pinocchio 4 fills both triangles (checked by a test)
         self.bias_forces = data.nle.copy()
-        self._centroidal_drift: np.ndarray | None = None
+        self._frames: dict[tuple[int, pin.ReferenceFrame], FrameKinematics] = {}
 
     @property
     def data(self) -> pin.Data:
         """The Pinocchio data of this pass. It is shared: a later pass on another ``(q, v)``
-        overwrites it, after which reading this state raises instead of answering for the
-        other state (values already read are copies and stay valid)."""
+        overwrites it, after which computing anything more from this state raises instead of
+        answering for the other state (values already computed are this state's and stay valid)."""
         data = self._pin_data
         owner = _OWNERS.get(id(data))
         if owner is not self and owner is not None and not (
                 np.array_equal(owner.q, self.q) and np.array_equal(owner.v, self.v)):
             raise DGraphError("a RobotState was read after its Pinocchio data was reused for another (q, v): "
-                              "keep copies of the values (e.g. com_position), not the state")
+                              "keep the values you need (e.g. com_position), not the state")
         return data
 
     # -- whole body -------------------------------------------------------------------------
@@ -78,44 +114,42 @@ class RobotState:
         """Total mass in kg."""
         return float(self.data.mass[0])
 
-    @property
+    @computed_once
     def com_position(self) -> np.ndarray:
         """Centre of mass ``c`` in the world frame."""
         return self.data.com[0].copy()
 
-    @property
+    @computed_once
     def com_velocity(self) -> np.ndarray:
         """``c_dot = J_com v``."""
         return self.data.vcom[0].copy()
 
-    @property
+    @computed_once
     def com_jacobian(self) -> np.ndarray:
         """``J_com`` (3 x nv)."""
         return self.data.Jcom.copy()
 
-    @property
+    @computed_once
     def com_drift(self) -> np.ndarray:
         """``J_com_dot v``: the CoM acceleration at ``a = 0``."""
         return self.data.acom[0].copy()
 
-    @property
+    @computed_once
     def centroidal_momentum_matrix(self) -> np.ndarray:
         """``A_G`` (6 x nv): ``h_G = [l, k] = A_G v`` at the CoM, world axes."""
         return self.data.Ag.copy()
 
-    @property
+    @computed_once
     def centroidal_momentum(self) -> np.ndarray:
         """``h_G = [l, k]`` (linear, angular) at the CoM."""
         return self.data.Ag @ self.v
 
-    @property
+    @computed_once
     def centroidal_drift(self) -> np.ndarray:
-        """``A_G_dot v``: the momentum rate at ``a = 0`` (computed on first request)."""
-        if self._centroidal_drift is None:
-            model, data = self.model, self.data
-            dhg = pin.computeCentroidalMomentumTimeVariation(model, data, self.q, self.v, np.zeros(model.nv))
-            self._centroidal_drift = np.concatenate([dhg.linear, dhg.angular])
-        return self._centroidal_drift
+        """``A_G_dot v``: the momentum rate at ``a = 0``."""
+        model, data = self.model, self.data
+        dhg = pin.computeCentroidalMomentumTimeVariation(model, data, self.q, self.v, np.zeros(model.nv))
+        return np.concatenate([dhg.linear, dhg.angular])
 
     def gravity_torque(self) -> np.ndarray:
         """``g(q)``, the generalized gravity (used by fallbacks; computed on request)."""
@@ -128,23 +162,37 @@ class RobotState:
             raise KeyError(name)
         return self.model.getFrameId(name)
 
+    def frame(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> FrameKinematics:
+        """Placement, velocity, Jacobian and drift of a frame in the convention ``ref``: one
+        Pinocchio call each, at the first request for ``(frame, ref)``, then kept."""
+        kinematics = self._frames.get((frame, ref))
+        if kinematics is None:
+            model, data = self.model, self.data
+            placement = data.oMf[frame].homogeneous  # a fresh array
+            if ref == WORLD:
+                drift = pin.getFrameClassicalAcceleration(model, data, frame, WORLD).vector
+            else:
+                drift = pin.getFrameAcceleration(model, data, frame, ref).vector
+            kinematics = self._frames[frame, ref] = FrameKinematics(
+                placement, placement[:3, :3], placement[:3, 3], pin.getFrameVelocity(model, data, frame, ref).vector,
+                pin.getFrameJacobian(model, data, frame, ref), drift)
+        return kinematics
+
     def frame_placement(self, frame: int) -> pin.SE3:
         """World placement ``oMf`` of a frame (a copy)."""
         return pin.SE3(self.data.oMf[frame])
 
     def frame_velocity(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> np.ndarray:
         """Frame twist ``[linear, angular]`` (``WORLD``: ``[p_dot, omega]``; ``LOCAL``: body twist)."""
-        return pin.getFrameVelocity(self.model, self.data, frame, ref).vector
+        return self.frame(frame, ref).velocity
 
     def frame_jacobian(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> np.ndarray:
         """Frame Jacobian (6 x nv) in the convention ``ref``."""
-        return pin.getFrameJacobian(self.model, self.data, frame, ref)
+        return self.frame(frame, ref).jacobian
 
     def frame_drift(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> np.ndarray:
         """``J_dot v``: classical acceleration (``WORLD``) or spatial acceleration (``LOCAL``) at a = 0."""
-        if ref == WORLD:
-            return pin.getFrameClassicalAcceleration(self.model, self.data, frame, WORLD).vector
-        return pin.getFrameAcceleration(self.model, self.data, frame, ref).vector
+        return self.frame(frame, ref).drift
 
 
 def unactuated_dofs(model: pin.Model) -> int:
@@ -190,11 +238,6 @@ class FrameReader:
             raise ParamError(f"{self.name}: the robot model has no frame {self.frame!r}", entity=self.name) from None
         self._frame_cache = (state.model, index)
         return index
-
-
-def homogeneous(placement: pin.SE3) -> np.ndarray:
-    """The 4 x 4 homogeneous matrix of a placement."""
-    return placement.homogeneous.copy()
 
 
 def load_model(model: Any, entity: str | None = None) -> pin.Model:
