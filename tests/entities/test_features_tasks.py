@@ -170,3 +170,81 @@ def test_gains_follow_a_producer_that_reuses_its_buffer():
     for t in (0, 1, 2):  # kp = 4, 16, 36: Kd = 4, 8, 12
         kp = 4.0 * (t + 1) ** 2
         assert np.allclose(task.desired_acceleration(t), -kp * f.error - 2 * np.sqrt(kp) * f.error_velocity)
+
+
+def test_a_solver_reads_one_output_per_task_and_the_others_follow_from_it():
+    _, q, v = random_state(7)
+    g, _ = robot_graph(q, v)
+    g.add(CenterOfMass("com")).reference_position.set(np.zeros(3))
+    task = g.add(Task("task"))
+    g.plug("robot.state", "com.robot")
+    g.plug("com.feature", "task.feature")
+    task.kp.set(np.array([10.0, 20.0, 30.0]))
+    task.kd.set(5.0)
+    equation = task.equation(0)
+    assert task.gains.count == 0 and task.desired_acceleration.count == 0  # only the equation was computed
+    kp, kd = task.gains(0)
+    assert kp is equation.kp and kd is equation.kd and np.array_equal(kd, [5.0] * 3)
+    np.testing.assert_array_equal(task.desired_acceleration(0), equation.vector + equation.feature.drift)
+    assert task.equation(1) is equation  # nothing it depends on changed
+    task.kd.set(6.0)
+    assert task.gains(1)[1][0] == 6.0 and task.equation(1) is not equation
+
+
+def test_constant_gains_are_converted_once_and_again_when_set():
+    _, q, v = random_state(8)
+    g, robot = robot_graph(q, v)
+    g.add(CenterOfMass("com")).reference_position.set(np.zeros(3))
+    task = g.add(Task("task", critical_damping=True))
+    g.plug("robot.state", "com.robot")
+    g.plug("com.feature", "task.feature")
+    task.kp.set(np.array([4.0, 9.0, 16.0]))
+    first = task.equation(0)
+    robot.v.set(2 * v)  # the feature changes, the gains do not
+    second = task.equation(1)
+    assert second is not first and second.kp is first.kp and second.kd is first.kd and second.weight is first.weight
+    np.testing.assert_array_equal(second.kd, [4.0, 6.0, 8.0])
+    with pytest.raises(ValueError, match="read-only"):
+        second.kp[0] = 0.0  # handed out at every tick: nobody may write into it
+    task.kp.set(np.array([4.0, 9.0, 16.0]))  # a new constant of the same value: same vectors
+    assert task.equation(2).kp is first.kp
+    task.kp.set(25.0)
+    third = task.equation(3)
+    np.testing.assert_array_equal(third.kp, [25.0] * 3)
+    np.testing.assert_array_equal(third.kd, [10.0] * 3)
+
+
+def test_a_contiguous_mask_selects_views_and_the_reference_orientation_follows_its_input():
+    model, q, v = random_state(9)
+    g, robot = robot_graph(q, v)
+    waist = g.add(FramePose("waist", frame="base_link", mask="000111"))
+    g.plug("robot.state", "waist.robot")
+    value = waist.feature(0)
+    world = robot.state(0).frame(model.getFrameId("base_link"))
+    assert np.shares_memory(value.jacobian, world.jacobian) and np.array_equal(value.jacobian, world.jacobian[3:])
+    np.testing.assert_allclose(value.error, pin.log3(world.rotation), atol=1e-12)  # R* = identity (the default)
+    turn = np.array([0.0, 0.0, 0.3])
+    waist.reference_orientation.set(pin.Quaternion(pin.exp3(turn)).coeffs())
+    np.testing.assert_allclose(waist.feature(0).error, pin.log3(world.rotation @ pin.exp3(turn).T), atol=1e-12)
+
+    class Turning(dg.Entity):
+        """A reference orientation turning about z, written into the same array every tick."""
+
+        def configure(self):
+            self.buffer = np.zeros(4)
+
+        @dg.output(shape=(4,), depends=("t",))
+        def quaternion(self, t):
+            self.buffer[:] = pin.Quaternion(pin.exp3(np.array([0.0, 0.0, 0.1 * t]))).coeffs()
+            return self.buffer
+
+    g.add(Turning("turning"))
+    g.plug("turning.quaternion", "waist.reference_orientation")
+    for t in (1, 2):
+        expected = pin.log3(world.rotation @ pin.exp3(np.array([0.0, 0.0, 0.1 * t])).T)
+        np.testing.assert_allclose(waist.feature(t).error, expected, atol=1e-12)
+    posture = g.add(JointPosture("posture"))
+    g.plug("robot.state", "posture.robot")
+    assert np.shares_memory(posture.feature(0).jacobian, posture.feature(3).jacobian)  # one constant selection
+    with pytest.raises(ValueError, match="read-only"):
+        posture.feature(3).drift[0] = 1.0

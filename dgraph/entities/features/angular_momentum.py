@@ -29,9 +29,11 @@ class AngularMomentum(Feature):
         """Three rows, no mask."""
         self.rows = None
         self.size = 3
+        self._zeros = np.zeros(3)
+        self._zeros.flags.writeable = False  # shared by every tick's value
 
     def evaluate(self, state: RobotState, t: int) -> FeatureValue:
         """Momentum error, Jacobian and drift."""
         momentum_matrix = state.centroidal_momentum_matrix[3:]
-        return FeatureValue(momentum_matrix @ state.v - self.reference(t), np.zeros(3), momentum_matrix,
+        return FeatureValue(momentum_matrix @ state.v - self.reference(t), self._zeros, momentum_matrix,
                             state.centroidal_drift[3:], self.reference_rate(t), is_rate=True)

@@ -30,7 +30,7 @@ class CenterOfMass(Feature):
     def configure(self) -> None:
         """Parse the mask."""
         self.rows = parse_mask(self, self.mask, 3)
-        self.size = 3 if self.rows is None else len(self.rows)
+        self.size = self.mask.count("1")
 
     def evaluate(self, state: RobotState, t: int) -> FeatureValue:
         """CoM error and its derivatives."""

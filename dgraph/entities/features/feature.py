@@ -4,11 +4,16 @@ from __future__ import annotations
 
 import abc
 from dataclasses import dataclass
+from typing import TypeAlias
 
 import numpy as np
 
 import dgraph as dg
 from dgraph.entities.robot.robot_state import RobotState
+
+Rows: TypeAlias = np.ndarray | slice | None
+"""Rows kept by a mask: all (``None``), a contiguous range (``slice``: selecting gives views) or
+indices."""
 
 
 @dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
@@ -30,8 +35,8 @@ class FeatureValue:
     reference_acceleration: np.ndarray
     is_rate: bool = False
 
-    def select(self, rows: np.ndarray | None) -> FeatureValue:
-        """The same feature restricted to ``rows`` (``None``: all)."""
+    def select(self, rows: Rows) -> FeatureValue:
+        """The same feature restricted to ``rows`` (``None``: all; a slice gives views)."""
         if rows is None:
             return self
         return FeatureValue(self.error[rows], self.error_velocity[rows], self.jacobian[rows],
@@ -47,13 +52,22 @@ def read_feature(entity: dg.Entity, t: int) -> FeatureValue:
     return value
 
 
-def parse_mask(entity: dg.Entity, mask: str, width: int) -> np.ndarray | None:
-    """Rows selected by a mask string such as ``"000111"`` (``None`` when all are selected)."""
+def parse_mask(entity: dg.Entity, mask: str, width: int) -> Rows:
+    """Rows selected by a mask string such as ``"000111"``: ``None`` when all are selected, a
+    slice when they are contiguous, else their indices."""
     if len(mask) != width or set(mask) - {"0", "1"} or "1" not in mask:
         raise dg.ParamError(f"{entity.name}: mask must be {width} characters 0/1 with at least one 1, "
                             f"got {mask!r}", entity=entity.name)
-    rows = np.flatnonzero([c == "1" for c in mask])
-    return None if len(rows) == width else rows
+    return contiguous(np.flatnonzero([c == "1" for c in mask]), width)
+
+
+def contiguous(indices: np.ndarray, width: int | None = None) -> Rows:
+    """``indices`` as ``None`` if they are all ``width`` rows in order, a slice if they are
+    consecutive and increasing (selecting then gives views), else themselves."""
+    start = int(indices[0]) if len(indices) else 0
+    if not np.array_equal(indices, np.arange(start, start + len(indices))):
+        return indices
+    return None if start == 0 and len(indices) == width else slice(start, start + len(indices))
 
 
 class Feature(dg.Entity, abc.ABC):
@@ -62,7 +76,7 @@ class Feature(dg.Entity, abc.ABC):
     Input: ``robot`` (the ``state`` output of a :class:`~dgraph.entities.robot.RobotModel`).
     Outputs: ``feature`` (a :class:`FeatureValue`, what a task plugs), ``error`` (``x (-) x*``)
     and ``error_velocity`` (for plots). Subclasses set ``self.size`` (rows after the mask)
-    and ``self.rows`` (mask rows or None) in ``configure``.
+    and ``self.rows`` (:data:`Rows` kept by the mask) in ``configure``.
     """
 
     robot = dg.Input(dtype="object", doc="the RobotModel's shared state")

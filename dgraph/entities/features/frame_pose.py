@@ -44,20 +44,28 @@ class FramePose(FrameReader, Feature):
     def configure(self) -> None:
         """Parse the mask."""
         self.rows = parse_mask(self, self.mask, 6)
-        self.size = 6 if self.rows is None else len(self.rows)
+        self.size = self.mask.count("1")
+        self._reference: tuple[np.ndarray, np.ndarray] | None = None  # (quaternion, R*) last converted
 
-    def evaluate(self, state: RobotState, t: int) -> FeatureValue:
-        """Pose error and its derivatives on SE(3), world axes."""
-        frame = self.frame_index(state)
-        placement = state.frame_placement(frame)
+    def _reference_rotation(self, t: int) -> np.ndarray:
+        """``R*`` from the reference quaternion (normalised), converted again only when the
+        quaternion is not the same constant as last time."""
         quat = self.reference_orientation(t)
+        cached = self._reference
+        if cached is not None and cached[0] is quat and self.reference_orientation.source is None:
+            return cached[1]
         norm = np.linalg.norm(quat)
         if not norm > 1e-9:
             raise dg.SpecError(f"{self.name}.reference_orientation is not a unit quaternion: {quat}",
                                entity=self.name, signal="reference_orientation")
-        reference_rotation = pin.Quaternion(quat / norm).toRotationMatrix()
-        error = np.concatenate([placement.translation - self.reference_position(t),
-                                orientation_error(placement.rotation, reference_rotation)])
-        return FeatureValue(error, state.frame_velocity(frame, WORLD) - self.reference_velocity(t),
-                            state.frame_jacobian(frame, WORLD), state.frame_drift(frame, WORLD),
+        rotation = pin.Quaternion(quat / norm).toRotationMatrix()
+        self._reference = (quat, rotation)
+        return rotation
+
+    def evaluate(self, state: RobotState, t: int) -> FeatureValue:
+        """Pose error and its derivatives on SE(3), world axes."""
+        frame = state.frame(self.frame_index(state), WORLD)
+        error = np.concatenate([frame.translation - self.reference_position(t),
+                                orientation_error(frame.rotation, self._reference_rotation(t))])
+        return FeatureValue(error, frame.velocity - self.reference_velocity(t), frame.jacobian, frame.drift,
                             self.reference_acceleration(t))

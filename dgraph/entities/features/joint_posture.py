@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.features.feature import Feature, FeatureValue
+from dgraph.entities.features.feature import Feature, FeatureValue, contiguous
 from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
 
 
@@ -41,11 +41,14 @@ class JointPosture(Feature):
             joint = model.joints[model.getJointId(name)]
             self.q_index.append(joint.idx_q)
             self.v_index.append(joint.idx_v)
-        self.q_index, self.v_index = np.array(self.q_index), np.array(self.v_index)
         self.rows, self.size = None, len(names)
         self.joint_names = names
         self._selection = np.zeros((self.size, model.nv))
         self._selection[np.arange(self.size), self.v_index] = 1.0
+        self._zeros = np.zeros(self.size)
+        for constant in (self._selection, self._zeros):  # shared by every tick's value: read-only
+            constant.flags.writeable = False
+        self.q_index, self.v_index = contiguous(np.array(self.q_index)), contiguous(np.array(self.v_index))
         default = self._named_configuration(model)
         self.declare("reference", dg.Input(shape=(self.size,), doc="q_j*", labels=names,
                                            **({} if default is None else {"default": default})))
@@ -71,7 +74,7 @@ class JointPosture(Feature):
         return np.asarray(q)[self.q_index].copy()
 
     def evaluate(self, state: RobotState, t: int) -> FeatureValue:
-        """Posture error; the Jacobian is a constant selection."""
+        """Posture error; the Jacobian (a selection) and the drift (0) are constants."""
         return FeatureValue(state.q[self.q_index] - self.reference(t),
                             state.v[self.v_index] - self.reference_velocity(t),
-                            self._selection, np.zeros(self.size), self.reference_acceleration(t))
+                            self._selection, self._zeros, self.reference_acceleration(t))

@@ -18,21 +18,25 @@ def _bytes_key(value: Any) -> tuple[tuple[int, ...], bytes]:
 class Gains:
     """Reads gain inputs (``kp``, ``kd``, ``weight``...) of ``entity`` as vectors of ``size``
     values >= 0 (a scalar is broadcast); a value is converted and checked only when it differs
-    from the one converted before (compared by value, so a producer may reuse its buffer)."""
+    from the one converted before. A constant (an input that is not plugged) handing back the
+    same object is the same value (constants are copies made when set); a plugged output's
+    value is compared by value (so a producer may reuse its buffer)."""
 
     def __init__(self, entity: dg.Entity):
         self.entity = entity
-        self._cache: dict[str, tuple[Any, np.ndarray]] = {}
+        self._cache: dict[str, tuple[Any, Any, np.ndarray]] = {}  # name: (value object, its key, vector)
 
     def vector(self, name: str, size: int, t: int) -> np.ndarray:
         """The input ``name`` at ``t`` as ``size`` values >= 0 (``SpecError`` naming it otherwise)."""
-        value = getattr(self.entity, name)(t)
-        key = value if type(value) is float else _bytes_key(value)
+        inp = getattr(self.entity, name)
+        value = inp(t)
         cached = self._cache.get(name)
-        if cached is not None and cached[0] == key and len(cached[1]) == size:
-            return cached[1]
-        vector = self._convert(name, value, size, t)
-        self._cache[name] = (key, vector)
+        fits = cached is not None and len(cached[2]) == size
+        if fits and value is cached[0] and inp.source is None:
+            return cached[2]
+        key = value if type(value) is float else _bytes_key(value)
+        vector = cached[2] if fits and cached[1] == key else self._convert(name, value, size, t)
+        self._cache[name] = (value, key, vector)
         return vector
 
     def _convert(self, name: str, value: Any, size: int, t: int) -> np.ndarray:
@@ -45,4 +49,6 @@ class Gains:
                                f"{array.shape}", entity=entity.name, signal=name)
         if (array < 0).any():
             raise dg.SpecError(f"{entity.name}.{name} must be >= 0 at tick {t}", entity=entity.name, signal=name)
-        return array.copy()
+        array = array.copy()
+        array.flags.writeable = False  # handed out again at every tick with the same value
+        return array

@@ -49,29 +49,36 @@ class Task(dg.Entity):
         kp = self._gain_vectors.vector("kp", size, t)
         if self.critical_damping:
             if self._critical is None or self._critical[0] is not kp:  # a new kp vector: a new Kd
-                self._critical = (kp, 2.0 * np.sqrt(kp))
+                kd = 2.0 * np.sqrt(kp)
+                kd.flags.writeable = False  # handed out at every tick, like kp
+                self._critical = (kp, kd)
             return kp, self._critical[1]
         return kp, self._gain_vectors.vector("kd", size, t)
 
-    def _feature(self, t: int) -> FeatureValue:
-        return read_feature(self, t)
-
     @dg.output(dtype="object")
+    def equation(self, t: int) -> TaskEquation:
+        """``A = J``, ``b = x_ddot_des - J_dot v``, per-row weights, and the feature and gains
+        (the only output a solver reads: the gains and the desired acceleration come with it)."""
+        f = read_feature(self, t)
+        size = len(f.error)
+        kp, kd = self._gains(size, t)
+        weight = self._gain_vectors.vector("weight", size, t)
+        return TaskEquation(f.jacobian, pd_law(f, kp, kd) - f.drift, weight, f, kp, kd)
+
+    @dg.output(dtype="object", depends=("equation",))
     def gains(self, t: int) -> tuple[np.ndarray, np.ndarray]:
         """``(Kp, Kd)`` as vectors of the feature's size."""
-        return self._gains(len(self._feature(t).error), t)
+        equation = self.equation(t)
+        return equation.kp, equation.kd
 
-    @dg.output(shape=None, depends=("feature", "gains"))
+    @dg.output(shape=None, depends=("equation",))
     def desired_acceleration(self, t: int) -> np.ndarray:
-        """``x_ddot* - Kp e - Kd e_dot``."""
-        f = self._feature(t)
-        kp, kd = self.gains(t)
-        return f.reference_acceleration - kp * f.error - kd * f.error_velocity
+        """``x_ddot* - Kp e - Kd e_dot`` (for plots; computed only when read)."""
+        equation = self.equation(t)
+        return pd_law(equation.feature, equation.kp, equation.kd)
 
-    @dg.output(dtype="object", depends=("feature", "weight", "gains", "desired_acceleration"))
-    def equation(self, t: int) -> TaskEquation:
-        """``A = J``, ``b = x_ddot_des - J_dot v``, per-row weights, and the feature and gains."""
-        f = self._feature(t)
-        weight = self._gain_vectors.vector("weight", len(f.error), t)
-        kp, kd = self.gains(t)
-        return TaskEquation(f.jacobian, self.desired_acceleration(t) - f.drift, weight, f, kp, kd)
+
+def pd_law(feature: FeatureValue, kp: np.ndarray, kd: np.ndarray) -> np.ndarray:
+    """The desired task acceleration ``x_ddot_des = x_ddot* - Kp e - Kd e_dot`` (Eq. 4.8, with
+    ``e = x (-) x*``)."""
+    return feature.reference_acceleration - kp * feature.error - kd * feature.error_velocity
