@@ -94,26 +94,35 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
         self._gains = Gains(self)
         self._lower = np.concatenate([np.full(len(pyramid), -np.inf), [self.min_normal_force]])
         self._upper = np.concatenate([np.zeros(len(pyramid)), [self.max_normal_force]])
+        self._anchor: tuple[pin.SE3, np.ndarray, np.ndarray] | None = None  # the anchor taken apart
 
     def here(self, t: int) -> pin.SE3:
         """The frame's placement at ``t`` (a copy)."""
         state = self.robot(t)
         return state.frame_placement(self.frame_index(state))
 
+    def _anchor_terms(self, t: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(R_a^T, p_a)`` of the anchor, taken apart once per anchor."""
+        anchor = self.anchor_or_here(t)
+        cached = self._anchor
+        if cached is None or cached[0] is not anchor:
+            cached = self._anchor = (anchor, anchor.rotation.T.copy(), anchor.translation)
+        return cached[1], cached[2]
+
     @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "anchor"))
     def contact(self, t: int) -> ContactConstraint:
         """Motion rows, force generator and friction rows at ``t``."""
         state = self.robot(t)
-        frame = self.frame_index(state)
-        placement, anchor = state.frame_placement(frame), self.anchor_or_here(t)
-        rotation = placement.rotation
-        error = np.concatenate([rotation.T @ (placement.translation - anchor.translation),
-                                pin.log3(anchor.rotation.T @ rotation)])
+        frame = state.frame(self.frame_index(state), LOCAL)
+        anchor_rotation_t, anchor_translation = self._anchor_terms(t)
+        rotation = frame.rotation
+        error = np.concatenate([rotation.T @ (frame.translation - anchor_translation),
+                                pin.log3(anchor_rotation_t @ rotation)])
         kp, kd = self._gains.vector("kp", 6, t), self._gains.vector("kd", 6, t)
-        desired = -kp * error - kd * state.frame_velocity(frame, LOCAL)
-        return ContactConstraint(self.name, bool(self.active(t)), state.frame_jacobian(frame, LOCAL),
-                                 desired - state.frame_drift(frame, LOCAL), self._generator, self._friction,
-                                 self._lower, self._upper, self.force_weight, rotation, error)
+        desired = -kp * error - kd * frame.velocity
+        return ContactConstraint(self.name, bool(self.active(t)), frame.jacobian, desired - frame.drift,
+                                 self._generator, self._friction, self._lower, self._upper, self.force_weight,
+                                 rotation, error)
 
     @dg.output(shape=(6,), depends=("contact",))
     def error(self, t: int) -> np.ndarray:

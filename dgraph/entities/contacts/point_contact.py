@@ -77,30 +77,31 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
         self._lower = np.array([-np.inf] * 4 + [self.min_normal_force])
         self._upper = np.array([0.0] * 4 + [self.max_normal_force])
         self._generator = np.eye(3)
+        self._rotation = np.eye(3)  # forces are in world axes
         self._gains = Gains(self)
 
     def here(self, t: int) -> np.ndarray:
         """The point at ``t`` (a copy)."""
-        return self.position(t).copy()
+        state = self.robot(t)
+        return state.frame(self.frame_index(state), WORLD).translation.copy()
 
     @dg.output(shape=(3,), depends=("robot",))
     def position(self, t: int) -> np.ndarray:
         """The point ``p`` (world)."""
         state = self.robot(t)
-        return state.frame_placement(self.frame_index(state)).translation
+        return state.frame(self.frame_index(state), WORLD).translation
 
-    @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "force_reference", "anchor", "position"))
+    @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "force_reference", "anchor"))
     def contact(self, t: int) -> ContactConstraint:
         """Motion rows, friction rows and the force reference at ``t``."""
         state = self.robot(t)
-        frame = self.frame_index(state)
-        error = self.position(t) - self.anchor_or_here(t)
+        frame = state.frame(self.frame_index(state), WORLD)
+        error = frame.translation - self.anchor_or_here(t)
         kp, kd = self._gains.vector("kp", 3, t), self._gains.vector("kd", 3, t)
-        velocity = state.frame_velocity(frame, WORLD)[:3]
-        rhs = -kp * error - kd * velocity - state.frame_drift(frame, WORLD)[:3]
-        return ContactConstraint(self.name, bool(self.active(t)), state.frame_jacobian(frame, WORLD)[:3], rhs,
-                                 self._generator, self._friction, self._lower, self._upper, self.force_weight,
-                                 np.eye(3), error, self._force_reference(t))
+        rhs = -kp * error - kd * frame.velocity[:3] - frame.drift[:3]
+        return ContactConstraint(self.name, bool(self.active(t)), frame.jacobian[:3], rhs, self._generator,
+                                 self._friction, self._lower, self._upper, self.force_weight, self._rotation,
+                                 error, self._force_reference(t))
 
     def _force_reference(self, t: int) -> np.ndarray | None:
         """``f*``, or None when nothing sets it (a plain contact: its force is regularised to 0
