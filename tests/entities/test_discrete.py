@@ -61,3 +61,20 @@ def test_sinusoid_fade_in_starts_at_rest_and_its_derivatives_are_exact():
         assert np.allclose((s.velocity(t + 1) - s.velocity(t - 1)) / (2 * h), s.acceleration(t), atol=1e-4)
     plain = graph.add(Sinusoid("plain", amplitude=[0.0, 0.05, 0.0], frequency=0.5, offset=[0.0, 0.0, 0.9]))
     assert np.allclose(s.output(1200), plain.output(1200)) and not np.allclose(s.output(500), plain.output(500))
+
+
+def test_sinusoid_with_a_frequency_and_a_phase_per_component():
+    graph = dg.Graph(dt=0.001)
+    s = graph.add(Sinusoid("s", amplitude=[0.1, 0.2], frequency=[0.5, 2.0], phase=[0.0, 1.0], offset=[1.0, 0.0],
+                           ramp=0.5))
+    w, phase = 2 * np.pi * np.array([0.5, 2.0]), np.array([0.0, 1.0])
+    assert np.allclose(s.output(700), [1.0, 0.0] + np.array([0.1, 0.2]) * np.sin(w * 0.7 + phase), atol=1e-15)
+    for t in (200, 700):  # inside and after the fade-in (truncation: h^2 / 6 times A w^3 ~ 7e-5, A w^4 ~ 1e-3)
+        h = 1e-3
+        assert np.allclose((s.output(t + 1) - s.output(t - 1)) / (2 * h), s.velocity(t), atol=2e-4)
+        assert np.allclose((s.velocity(t + 1) - s.velocity(t - 1)) / (2 * h), s.acceleration(t), atol=3e-3)
+    uniform = graph.add(Sinusoid("u", amplitude=[0.1, 0.2], frequency=[2.0, 2.0], phase=1.0, ramp=0.5))
+    mixed = graph.add(Sinusoid("m", amplitude=[0.1, 0.2], frequency=[2.0, 2.0], phase=[1.0, 1.0 + 1e-12], ramp=0.5))
+    for t in (200, 700):  # one sine for both components, or one each: the same waves
+        for name in ("output", "velocity", "acceleration"):
+            assert np.allclose(uniform.signal(name)(t), mixed.signal(name)(t), rtol=1e-10, atol=1e-12)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -35,12 +36,19 @@ class Sinusoid(dg.Entity):
     dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
 
     def configure(self) -> None:
-        """Broadcast the parameters to a common shape."""
+        """Broadcast the parameters to a common shape; a frequency and a phase shared by every
+        component are kept as floats (one ``math.sin`` and ``math.cos`` per tick)."""
         self.value_shape = np.shape(self.amplitude)
-        self._omega = 2.0 * np.pi * np.broadcast_to(self.frequency, self.value_shape)
-        self._phase = np.broadcast_to(self.phase, self.value_shape)
+        self._amplitude = np.asarray(self.amplitude, dtype=float)
+        omega = 2.0 * np.pi * np.broadcast_to(self.frequency, self.value_shape)
+        phase = np.broadcast_to(self.phase, self.value_shape)
         self._offset = np.broadcast_to(self.offset, self.value_shape)
         self._scalar = self.value_shape == ()
+        if omega.size and (omega == omega.flat[0]).all() and (phase == phase.flat[0]).all():
+            self._omega, self._phase = float(omega.flat[0]), float(phase.flat[0])
+            self._sin, self._cos = math.sin, math.cos
+        else:
+            self._omega, self._phase, self._sin, self._cos = omega, phase, np.sin, np.cos
         self._last: tuple[int, tuple[Any, Any, Any]] | None = None
 
     def _envelope(self, s: float) -> tuple[float, float, float]:
@@ -52,14 +60,19 @@ class Sinusoid(dg.Entity):
                 60 * x * (1 - x) * (1 - 2 * x) / self.ramp**2)
 
     def _waves(self, t: int) -> tuple[Any, Any, Any]:
-        """Position, velocity and acceleration at tick ``t``, computed together once per tick."""
+        """Position, velocity and acceleration at tick ``t``, computed together once per tick:
+        ``offset + k0 A``, ``k1 A``, ``k2 A`` with ``k0 = e sin``, ``k1 = e w cos + e_dot sin``,
+        ``k2 = -e w^2 sin + 2 e_dot w cos + e_ddot sin`` (``sin``, ``cos`` of ``w s + phase``)."""
         if self._last is not None and self._last[0] == t:
             return self._last[1]
         s = t * self.dt
-        arg = self._omega * s + self._phase
+        omega = self._omega
+        arg = omega * s + self._phase
+        sin, cos = self._sin(arg), self._cos(arg)
         e, de, dde = self._envelope(s)
-        sin, cos = self.amplitude * np.sin(arg), self.amplitude * self._omega * np.cos(arg)
-        waves = (self._offset + e * sin, e * cos + de * sin, -e * self._omega**2 * sin + 2 * de * cos + dde * sin)
+        amplitude = self._amplitude
+        waves = (self._offset + e * sin * amplitude, (e * omega * cos + de * sin) * amplitude,
+                 (-e * omega * omega * sin + 2 * de * omega * cos + dde * sin) * amplitude)
         if self._scalar:
             waves = tuple(float(w) for w in waves)
         self._last = (t, waves)
