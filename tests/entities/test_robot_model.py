@@ -42,6 +42,7 @@ def test_mass_matrix_and_bias_forces_match_pinocchio(model, seed):
     pin.crba(model, data, q)
     upper = np.triu(data.M)
     assert np.allclose(state.mass_matrix, upper + np.triu(upper, 1).T, atol=1e-10)
+    np.testing.assert_array_equal(state.mass_matrix, state.mass_matrix.T)  # copied as its transpose
     assert np.allclose(state.bias_forces, pin.rnea(model, data, q, v, np.zeros(model.nv)), atol=1e-9)
 
 
@@ -85,18 +86,18 @@ def test_local_frame_jacobian_and_drift_by_finite_differences(model):
 def test_com_and_centroidal_terms_by_finite_differences(model):
     q, v = random_state(model, 4)
     state = state_at(model, q, v)
-    com = lambda qq: state_at(model, qq, v).com_position  # noqa: E731
+    com = lambda qq: state_at(model, qq, v).com.position  # noqa: E731
     for i in range(0, model.nv, 3):
         e = np.zeros(model.nv)
         e[i] = 1.0
-        assert np.allclose(central(com, model, q, e), state.com_jacobian[:, i], atol=1e-7), i
-    assert np.allclose(state.com_velocity, state.com_jacobian @ v, atol=1e-12)
-    com_velocity = lambda qq: state_at(model, qq, v).com_jacobian @ v  # noqa: E731
-    assert np.allclose(central(com_velocity, model, q, v), state.com_drift, atol=1e-5)
+        assert np.allclose(central(com, model, q, e), state.com.jacobian[:, i], atol=1e-7), i
+    assert np.allclose(state.com.velocity, state.com.jacobian @ v, atol=1e-12)
+    com_velocity = lambda qq: state_at(model, qq, v).com.jacobian @ v  # noqa: E731
+    assert np.allclose(central(com_velocity, model, q, v), state.com.drift, atol=1e-5)
     momentum = lambda qq: state_at(model, qq, v).centroidal_momentum_matrix @ v  # noqa: E731
     assert np.allclose(central(momentum, model, q, v), state.centroidal_drift, atol=1e-4)
     # linear momentum is m * com velocity
-    assert np.allclose(state.centroidal_momentum[:3], state.total_mass * state.com_velocity, atol=1e-9)
+    assert np.allclose(state.centroidal_momentum[:3], state.total_mass * state.com.velocity, atol=1e-9)
 
 
 def test_entity_outputs_share_one_pass_per_tick(model):
@@ -123,7 +124,7 @@ def test_each_quantity_is_computed_once_per_state_and_matches_pinocchio(model):
     robot.q.set(q)
     robot.v.set(v)
     state, fid = robot.state(0), model.getFrameId("left_sole_link")
-    assert state.com_jacobian is state.com_jacobian and state.frame(fid) is state.frame(fid, WORLD)
+    assert state.com is state.com and state.frame(fid) is state.frame(fid, WORLD)
     assert state.frame(fid, LOCAL) is not state.frame(fid, WORLD)
     sole = state.frame(fid)  # the frame outputs hand out the state's arrays, not copies of them
     assert robot.left_sole_link_jacobian(0) is sole.jacobian and robot.left_sole_link_drift(0) is sole.drift
@@ -164,13 +165,15 @@ def test_a_state_kept_past_its_pass_raises_instead_of_answering_for_another(mode
     robot.v.set(v)
     old = robot.state(0)
     fid = model.getFrameId("left_sole_link")
-    com, placement, sole = old.com_position, old.frame_placement(fid), old.frame(fid)
+    com, placement, sole = old.com, old.frame_placement(fid), old.frame(fid)
     robot.q.set(pin.neutral(model))
     robot.state(0)  # a new pass on the shared data
-    for read in (lambda: old.com_jacobian, lambda: old.frame(fid, LOCAL), lambda: old.frame_placement(fid)):
+    reads = (lambda: old.centroidal_drift, lambda: old.frame(fid, LOCAL), lambda: old.frame_placement(fid))
+    for read in reads:
         with pytest.raises(dg.DGraphError, match="read after its Pinocchio data was reused"):
             read()
-    assert old.com_position is com and old.frame(fid) is sole  # what it computed before is still its own
+    assert old.com is com and old.frame(fid) is sole  # what it computed before is still its own
+    com = com.position
     assert np.allclose(com, pin.centerOfMass(model, model.createData(), q))
     assert np.array_equal(sole.placement, placement.homogeneous)
     data = model.createData()
@@ -187,7 +190,10 @@ def test_inverse_mass_matrix_inverts_the_mass_matrix_and_leaves_the_drifts():
     robot.q.set(q)
     robot.v.set(rng.normal(size=model.nv))
     state = robot.state(0)
-    drift_before = state.com_drift
     inverse = state.inverse_mass_matrix
     assert np.abs(inverse @ state.mass_matrix - np.eye(model.nv)).max() < 1e-9
-    assert np.array_equal(state.com_drift, drift_before)
+    fresh = RobotState(model, model.createData(), state.q, state.v)  # terms computed after the inverse: the same
+    np.testing.assert_array_equal(state.centroidal_drift, fresh.centroidal_drift)
+    for name in ("position", "velocity", "jacobian", "drift"):
+        np.testing.assert_array_equal(getattr(state.com, name), getattr(fresh.com, name))
+    np.testing.assert_array_equal(state.frame(3, LOCAL).drift, fresh.frame(3, LOCAL).drift)

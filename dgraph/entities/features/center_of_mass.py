@@ -34,6 +34,6 @@ class CenterOfMass(Feature):
 
     def evaluate(self, state: RobotState, t: int) -> FeatureValue:
         """CoM error and its derivatives."""
-        return FeatureValue(state.com_position - self.reference_position(t),
-                            state.com_velocity - self.reference_velocity(t),
-                            state.com_jacobian, state.com_drift, self.reference_acceleration(t))
+        com = state.com
+        return FeatureValue(com.position - self.reference_position(t), com.velocity - self.reference_velocity(t),
+                            com.jacobian, com.drift, self.reference_acceleration(t))

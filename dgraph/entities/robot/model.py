@@ -129,22 +129,22 @@ class RobotModel(dg.Entity):
     @dg.output(shape=(3,), depends=("state",), labels=("x", "y", "z"))
     def com_position(self, t: int) -> np.ndarray:
         """CoM position in the world frame."""
-        return self.state(t).com_position
+        return self.state(t).com.position
 
     @dg.output(shape=(3,), depends=("state",), labels=("x", "y", "z"))
     def com_velocity(self, t: int) -> np.ndarray:
         """CoM velocity ``J_com v``."""
-        return self.state(t).com_velocity
+        return self.state(t).com.velocity
 
     @dg.output(shape=(3, "nv"), depends=("state",))
     def com_jacobian(self, t: int) -> np.ndarray:
         """``J_com``."""
-        return self.state(t).com_jacobian
+        return self.state(t).com.jacobian
 
     @dg.output(shape=(3,), depends=("state",))
     def com_drift(self, t: int) -> np.ndarray:
         """``J_com_dot v``."""
-        return self.state(t).com_drift
+        return self.state(t).com.drift
 
     @dg.output(shape=(6, "nv"), depends=("state",))
     def centroidal_momentum_matrix(self, t: int) -> np.ndarray:

@@ -28,9 +28,8 @@ WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 LOCAL = pin.ReferenceFrame.LOCAL
 
 
-_OWNERS: weakref.WeakValueDictionary[int, RobotState] = weakref.WeakValueDictionary()
-"""The state whose pass last filled each Pinocchio data (by ``id``; a live entry keeps its data
-alive, so an ``id`` is never reused while it is listed)."""
+_OWNER = "dgraph_state"
+"""The attribute of a Pinocchio data holding a weak reference to the state whose pass last filled it."""
 
 
 class computed_once:
@@ -66,6 +65,18 @@ class FrameKinematics:
     drift: np.ndarray
 
 
+@dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
+class CenterOfMassKinematics:
+    """The centre of mass of one :class:`RobotState`: ``position`` ``c`` (world), ``velocity``
+    ``c_dot = J_com v``, ``jacobian`` ``J_com`` (3 x nv) and ``drift`` ``J_com_dot v`` (the CoM
+    acceleration at ``a = 0``). Arrays of this tick, like :class:`FrameKinematics`'s."""
+
+    position: np.ndarray
+    velocity: np.ndarray
+    jacobian: np.ndarray
+    drift: np.ndarray
+
+
 class RobotState:
     """Kinematics and dynamics of ``model`` at ``(q, v)``, computed once.
 
@@ -73,17 +84,16 @@ class RobotState:
     CoM and its Jacobian, centroidal momentum matrix). Its forward pass leaves in ``data.a`` the
     body accelerations at ``a = 0``, so frame accelerations read from it, and the CoM
     acceleration computed from it, are the drifts ``J_dot v`` (checked by finite differences).
+    Attributes set by the constructor: ``mass_matrix``, ``bias_forces``.
     Every other quantity is computed from that data at its first read and kept (a copy owned by
     this state, shared by every reader of the tick): each is computed at most once per state.
     """
 
     def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray):
         self.model, self._pin_data, self.q, self.v = model, data, q, v
-        _OWNERS[id(data)] = self
+        setattr(data, _OWNER, weakref.ref(self))
         pin.computeAllTerms(model, data, q, v)  # also leaves data.a = the accelerations at a = 0
-        pin.updateFramePlacements(model, data)
-        pin.centerOfMass(model, data, pin.KinematicLevel.ACCELERATION, False)
-        self.mass_matrix = data.M.copy()  # Pinocchio 4 fills both triangles (checked by a test)
+        self.mass_matrix = data.M.T.copy()  # M is symmetric to the bit (checked by a test): one block copy
         self.bias_forces = data.nle.copy()
         self._frames: dict[tuple[int, pin.ReferenceFrame], FrameKinematics] = {}
 
@@ -93,11 +103,11 @@ class RobotState:
         overwrites it, after which computing anything more from this state raises instead of
         answering for the other state (values already computed are this state's and stay valid)."""
         data = self._pin_data
-        owner = _OWNERS.get(id(data))
-        if owner is not self and owner is not None and not (
-                np.array_equal(owner.q, self.q) and np.array_equal(owner.v, self.v)):
+        owner = getattr(data, _OWNER)()
+        if owner is not self and (owner is None or not (
+                np.array_equal(owner.q, self.q) and np.array_equal(owner.v, self.v))):
             raise DGraphError("a RobotState was read after its Pinocchio data was reused for another (q, v): "
-                              "keep the values you need (e.g. com_position), not the state")
+                              "keep the values you need (e.g. com.position), not the state")
         return data
 
     # -- whole body -------------------------------------------------------------------------
@@ -115,24 +125,12 @@ class RobotState:
         return float(self.data.mass[0])
 
     @computed_once
-    def com_position(self) -> np.ndarray:
-        """Centre of mass ``c`` in the world frame."""
-        return self.data.com[0].copy()
-
-    @computed_once
-    def com_velocity(self) -> np.ndarray:
-        """``c_dot = J_com v``."""
-        return self.data.vcom[0].copy()
-
-    @computed_once
-    def com_jacobian(self) -> np.ndarray:
-        """``J_com`` (3 x nv)."""
-        return self.data.Jcom.copy()
-
-    @computed_once
-    def com_drift(self) -> np.ndarray:
-        """``J_com_dot v``: the CoM acceleration at ``a = 0``."""
-        return self.data.acom[0].copy()
+    def com(self) -> CenterOfMassKinematics:
+        """Position, velocity, Jacobian and drift of the centre of mass (the drift from
+        ``centerOfMass`` at the acceleration level on the pass's accelerations at ``a = 0``)."""
+        data = self.data
+        position = pin.centerOfMass(self.model, data, pin.KinematicLevel.ACCELERATION, False)  # a copy
+        return CenterOfMassKinematics(position, data.vcom[0].copy(), data.Jcom.copy(), data.acom[0].copy())
 
     @computed_once
     def centroidal_momentum_matrix(self) -> np.ndarray:
@@ -146,10 +144,10 @@ class RobotState:
 
     @computed_once
     def centroidal_drift(self) -> np.ndarray:
-        """``A_G_dot v``: the momentum rate at ``a = 0``."""
-        model, data = self.model, self.data
-        dhg = pin.computeCentroidalMomentumTimeVariation(model, data, self.q, self.v, np.zeros(model.nv))
-        return np.concatenate([dhg.linear, dhg.angular])
+        """``A_G_dot v``: the momentum rate at ``a = 0``, from the velocities and the accelerations
+        at ``a = 0`` of the pass (Pinocchio's variant without ``q, v, a``, which uses them; it
+        writes only the momentum fields of the data)."""
+        return pin.computeCentroidalMomentumTimeVariation(self.model, self.data).vector.copy()
 
     def gravity_torque(self) -> np.ndarray:
         """``g(q)``, the generalized gravity (used by fallbacks; computed on request)."""
@@ -164,11 +162,13 @@ class RobotState:
 
     def frame(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> FrameKinematics:
         """Placement, velocity, Jacobian and drift of a frame in the convention ``ref``: one
-        Pinocchio call each, at the first request for ``(frame, ref)``, then kept."""
+        Pinocchio call each, at the first request for ``(frame, ref)``, then kept. (Frame
+        placements are computed one frame at a time, only for the frames asked about; the
+        Jacobian, velocity and accelerations come from the joints' quantities.)"""
         kinematics = self._frames.get((frame, ref))
         if kinematics is None:
             model, data = self.model, self.data
-            placement = data.oMf[frame].homogeneous  # a fresh array
+            placement = pin.updateFramePlacement(model, data, frame).homogeneous  # a fresh array
             if ref == WORLD:
                 drift = pin.getFrameClassicalAcceleration(model, data, frame, WORLD).vector
             else:
@@ -180,7 +180,7 @@ class RobotState:
 
     def frame_placement(self, frame: int) -> pin.SE3:
         """World placement ``oMf`` of a frame (a copy)."""
-        return pin.SE3(self.data.oMf[frame])
+        return pin.updateFramePlacement(self.model, self.data, frame)
 
     def frame_velocity(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> np.ndarray:
         """Frame twist ``[linear, angular]`` (``WORLD``: ``[p_dot, omega]``; ``LOCAL``: body twist)."""
