@@ -77,7 +77,8 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
         self._lower = np.array([-np.inf] * 4 + [self.min_normal_force])
         self._upper = np.array([0.0] * 4 + [self.max_normal_force])
         self._generator = np.eye(3)
-        self._rotation = np.eye(3)  # forces are in world axes
+        self._rotation = np.eye(3)  # forces are in world axes; shared by every tick's constraint: read-only
+        self._rotation.flags.writeable = False
         self._gains = Gains(self)
 
     def here(self, t: int) -> np.ndarray:
