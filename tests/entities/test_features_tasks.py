@@ -40,7 +40,7 @@ def feature_at(make, q, v, setup=lambda f: None):
     return feature.feature(0)
 
 
-@pytest.mark.parametrize("mask", ["111111", "000111", "001000"])
+@pytest.mark.parametrize("mask", ["111111", "000111", "001000", "100110"])
 def test_frame_pose_error_rate_and_jacobian_by_finite_differences(mask):
     model, q, v = random_state(0)
     fid = model.getFrameId("arm_left_7_link")

@@ -76,14 +76,15 @@ class Feature(dg.Entity, abc.ABC):
     Input: ``robot`` (the ``state`` output of a :class:`~dgraph.entities.robot.RobotModel`).
     Outputs: ``feature`` (a :class:`FeatureValue`, what a task plugs), ``error`` (``x (-) x*``)
     and ``error_velocity`` (for plots). Subclasses set ``self.size`` (rows after the mask)
-    and ``self.rows`` (:data:`Rows` kept by the mask) in ``configure``.
+    and ``self.rows`` (the :data:`Rows` of :meth:`evaluate`'s value that the mask keeps) in
+    ``configure``.
     """
 
     robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
 
     @abc.abstractmethod
     def evaluate(self, state: RobotState, t: int) -> FeatureValue:
-        """The full (unmasked) feature at ``t`` (each feature type defines it)."""
+        """The feature at ``t`` before ``self.rows`` are selected (each feature type defines it)."""
 
     @dg.output(dtype="object")
     def feature(self, t: int) -> FeatureValue:

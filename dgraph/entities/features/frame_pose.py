@@ -42,8 +42,12 @@ class FramePose(FrameReader, Feature):
     reference_acceleration = dg.Input(shape=(6,), default=np.zeros(6), doc="[p_ddot*, omega_dot*]")
 
     def configure(self) -> None:
-        """Parse the mask."""
-        self.rows = parse_mask(self, self.mask, 6)
+        """Parse the mask: the half (position or orientation) it keeps rows of, or both, and the
+        rows kept within it."""
+        parse_mask(self, self.mask, 6)
+        position, orientation = "1" in self.mask[:3], "1" in self.mask[3:]
+        self._block = slice(0 if position else 3, 6 if orientation else 3)
+        self.rows = parse_mask(self, self.mask[self._block], self._block.stop - self._block.start)
         self.size = self.mask.count("1")
         self._reference: tuple[np.ndarray, np.ndarray] | None = None  # (quaternion, R*) last converted
 
@@ -63,9 +67,15 @@ class FramePose(FrameReader, Feature):
         return rotation
 
     def evaluate(self, state: RobotState, t: int) -> FeatureValue:
-        """Pose error and its derivatives on SE(3), world axes."""
+        """Pose error and its derivatives on SE(3), world axes, on the half the mask keeps rows of
+        (both halves: all six rows)."""
         frame = state.frame(self.frame_index(state), WORLD)
-        error = np.concatenate([frame.translation - self.reference_position(t),
-                                orientation_error(frame.rotation, self._reference_rotation(t))])
-        return FeatureValue(error, frame.velocity - self.reference_velocity(t), frame.jacobian, frame.drift,
-                            self.reference_acceleration(t))
+        block = self._block
+        parts = []
+        if block.start == 0:
+            parts.append(frame.translation - self.reference_position(t))
+        if block.stop == 6:
+            parts.append(orientation_error(frame.rotation, self._reference_rotation(t)))
+        error = parts[0] if len(parts) == 1 else np.concatenate(parts)
+        return FeatureValue(error, frame.velocity[block] - self.reference_velocity(t)[block], frame.jacobian[block],
+                            frame.drift[block], self.reference_acceleration(t)[block])
