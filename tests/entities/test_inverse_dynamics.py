@@ -258,9 +258,33 @@ def test_the_assembly_allocates_no_array_in_steady_state():
         assembly, solve = [], []
         for tick in range(3, 103):
             data = problem(tick)
-            assembly.append(peak_above(lambda data=data: qp.assemble(*data)))
+            assembly.append(peak_above(lambda data=data, tick=tick: qp.assemble(*data, tick=tick)))
             solve.append(peak_above(lambda data=data, tick=tick: qp.solve(*data, tick)))
     finally:
         tracemalloc.stop()
     assert max(assembly) < 1024, max(assembly)
     assert max(solve) < 4096, max(solve)
+
+
+def test_the_cost_is_the_same_whether_a_task_is_steady_or_moving():
+    """The posture task hands the same selection matrix and weights every tick: from the second
+    tick its part of H is kept, only the moving tasks' rows are multiplied. H and g still equal
+    sum_i 2 A_i^T W_i A_i + 2 eps I and -sum_i 2 A_i^T W_i b_i, tick after tick."""
+    from tests.entities.talos_graph import CONTACTS, TASKS
+
+    graph = build()
+    qp = graph["solver"]._qp
+    q0 = half_sitting()
+    for tick in range(4):
+        q = q0.copy()
+        q[7:] += 1e-2 * np.sin(0.3 * tick + np.arange(32))
+        graph["robot"].q.set(q)
+        state = graph["robot"].state(tick)
+        tasks = [graph[n].equation(tick) for n in TASKS]
+        ws = qp.assemble(state.mass_matrix, state.bias_forces, tasks, [graph[n].contact(tick) for n in CONTACTS],
+                         tick=tick)
+        hessian = sum(2.0 * t.matrix.T @ (t.weight[:, None] * t.matrix) for t in tasks) + 2e-6 * np.eye(38)
+        gradient = -sum(2.0 * t.matrix.T @ (t.weight * t.vector) for t in tasks)
+        np.testing.assert_allclose(ws.H[:38, :38], hessian, rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(ws.g[:38], gradient, rtol=1e-12, atol=1e-9)
+    assert qp.task_rows(tasks, tick)._is_steady == (False, True, False)  # com, posture, waist

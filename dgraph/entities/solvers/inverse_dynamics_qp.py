@@ -38,7 +38,6 @@ is solved again with them (``QPSolution.torque_limited``).
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
 from dataclasses import dataclass, field
@@ -53,6 +52,10 @@ INFINITY = 1e20
 """ProxQP's bound for 'no bound'."""
 POWER_TOLERANCE = 1e-9
 """W: a passivity bound this close to what the velocity allows counts as met (rounding noise)."""
+PROXIMAL_RHO = 1e-8
+"""ProxQP's proximal parameter on the primal variables (its default is 1e-6): on recorded TALOS
+ticks 1e-8 takes 1.3 iterations instead of 2.0 at eps_abs 1e-6 and lands ~100 times closer to
+the exact optimum (``bench/qp_tolerance.py``)."""
 DEFAULT_EPS_ABS = 1e-6
 """ProxQP's absolute tolerance: on recorded TALOS ticks it changes ``tau`` by at most ~1e-2 N m
 against 1e-9, with half the iterations (``bench/qp_tolerance.py``, docs/benchmarks.md)."""
@@ -107,7 +110,6 @@ class QPSolution:
     status: int
     iterations: int
     solve_time: float
-    objective: float = 0.0
     contacts: list[ContactConstraint] = field(default_factory=list)
     contact_rows: list[int] = field(default_factory=list)  # which declared contact each one is (set by the entity)
     passivity_relaxed: bool = False  # solved again without the passivity row (set by the entity)
@@ -121,17 +123,22 @@ class WarmStartedQP:
     first solve (the problem's scaling hardly changes between ticks; recomputing it doubles the
     solve time). Solving again at the same tick (a graph with its cache off) starts from the
     same guess: ProxQP then gives the same answer bit for bit. After a failure the next solve
-    starts cold, with a new preconditioner (never from a failed iterate).
+    starts cold, with a new preconditioner (never from a failed iterate). ProxQP's proximal
+    parameter is ``rho`` (``PROXIMAL_RHO``). Inequality rows and bounds that did not change since
+    the last solve are not handed over again.
     """
 
-    def __init__(self, n: int, n_eq: int, n_in: int, eps_abs: float, max_iterations: int):
+    def __init__(self, n: int, n_eq: int, n_in: int, eps_abs: float, max_iterations: int,
+                 rho: float = PROXIMAL_RHO):
         qp = proxsuite.proxqp.dense.QP(n, n_eq, n_in)
         qp.settings.eps_abs = eps_abs
         qp.settings.eps_rel = 0.0
         qp.settings.max_iter = max_iterations
         qp.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START
+        qp.settings.default_rho = rho
         self.qp = qp
         self.initialised = False
+        self.inequalities_changed = True  # C, lower or upper changed since the last solve
         self.has_solution = False  # the latest buffers hold a solution
         self.latest = (np.zeros(n), np.zeros(n_eq), np.zeros(n_in))
         self.guess = (np.zeros(n), np.zeros(n_eq), np.zeros(n_in))
@@ -161,7 +168,9 @@ class WarmStartedQP:
         may be shorter than this problem's: a solution without its last rows)."""
         self._prepare_guess(tick, start)
         qp = self.qp
-        if self.initialised:
+        if self.initialised and not self.inequalities_changed:
+            qp.update(*problem[:4], None, None, None, update_preconditioner=False)
+        elif self.initialised:
             qp.update(*problem, update_preconditioner=False)
         else:
             qp.init(*problem)
@@ -183,57 +192,80 @@ class WarmStartedQP:
         self.has_solution = status == SOLVED
         if not self.has_solution:
             self.initialised = False
+        self.inequalities_changed = False
         return status, int(info.iter)
 
 
 class TaskRows:
-    """The stacked rows of a list of tasks of fixed sizes (the task part of the cost).
+    """The stacked rows of a list of tasks (the task part of the cost), for fixed task sizes and
+    a fixed set of *steady* tasks (whose matrix and weights are the same arrays as last tick).
 
-    ``matrix`` (m x nv), ``vector`` and ``weight`` (m) hold every task's block of rows; the cost
-    ``sum_i w_i (A a - b)_i^2`` is ``a^T H a / 2 + g^T a`` + const with ``H = (R A)^T (R A)`` and
-    ``g = -(R A)^T (s R b)``, ``R = diag(sqrt(2 w))`` (ProxQP minimises ``x^T H x / 2 + g^T x``).
-    A task's weights are checked (>= 0) and rooted only when its weight array changes.
+    ``matrix`` (m x nv), ``vector`` and ``weight`` (m) hold every task's block of rows, the
+    moving tasks' first; the cost ``sum_i w_i (A a - b)_i^2`` is ``a^T H a / 2 + g^T a`` + const
+    with ``H = (R A)^T (R A)`` and ``g = -(R A)^T (s R b)``, ``R = diag(sqrt(2 w))`` (ProxQP
+    minimises ``x^T H x / 2 + g^T x``). The steady tasks' part of ``H`` is formed once (a
+    posture task's selection matrix: 32 of TALOS's 41 demo rows), so each tick multiplies only
+    the moving rows. A task's weights are checked (>= 0) and rooted only when they change.
     """
 
-    def __init__(self, sizes: tuple[int, ...], nv: int):
-        starts = np.cumsum((0, *sizes))
-        self.blocks = [slice(int(a), int(b)) for a, b in itertools.pairwise(starts)]
-        m = int(starts[-1])
+    def __init__(self, sizes: tuple[int, ...], steady: tuple[bool, ...], nv: int):
+        order = [i for i in range(len(sizes)) if not steady[i]] + [i for i in range(len(sizes)) if steady[i]]
+        self.blocks: list[slice] = [slice(0, 0)] * len(sizes)
+        start = 0
+        for i in order:
+            self.blocks[i] = slice(start, start + sizes[i])
+            start += sizes[i]
+        m, moving = start, sum(sizes[i] for i in range(len(sizes)) if not steady[i])
         self.matrix, self.vector, self.weight = np.zeros((m, nv)), np.zeros(m), np.zeros(m)
         self.root, self.root_rows = np.zeros(m), np.zeros((m, nv))  # sqrt(2 w), and repeated along the rows
-        self.scaled = np.zeros((m, nv))
+        self.scaled, self.scaled_vector = np.zeros((m, nv)), np.zeros(m)
         self._scaled_transposed = self.scaled.T
-        self.scaled_vector = np.zeros(m)
-        self.hessian, self.gradient = np.zeros((nv, nv)), np.zeros(nv)
+        self._moving = (self.matrix[:moving], self.root_rows[:moving], self.scaled[:moving], self.scaled[:moving].T)
+        self._steady = (self.scaled[moving:], self.scaled[moving:].T)
+        self.hessian, self.gradient, self.steady_hessian = np.zeros((nv, nv)), np.zeros(nv), np.zeros((nv, nv))
+        self._is_steady = steady
+        self._matrices: list[object] = [None] * len(sizes)  # the arrays written into each block
         self._weights: list[object] = [None] * len(sizes)
+        self._steady_stale = True
 
     def write(self, tasks: list[TaskEquation]) -> bool:
-        """Copy every task's rows into its block; False if a task's weights are negative."""
-        matrix, vector, weight, weights = self.matrix, self.vector, self.weight, self._weights
-        changed = False
+        """Copy every task's rows into its block (a matrix or weights only when they are other
+        arrays than the ones written); False if a task's weights are negative."""
+        matrix, vector, weight, matrices, weights = self.matrix, self.vector, self.weight, self._matrices, self._weights
+        reweighted = False
         for index, (task, block) in enumerate(zip(tasks, self.blocks, strict=True)):
-            matrix[block] = task.matrix
             vector[block] = task.vector
+            if task.matrix is not matrices[index]:
+                matrix[block] = task.matrix
+                matrices[index] = task.matrix
+                self._steady_stale |= self._is_steady[index]
             if task.weight is not weights[index]:
                 weight[block] = task.weight
                 weights[index] = task.weight
-                changed = True
-        if changed:
+                reweighted = True
+        if reweighted:
             if (weight < 0.0).any():
                 self._weights = [None] * len(self.blocks)
                 return False
             np.multiply(weight, 2.0, out=self.root)
             np.sqrt(self.root, out=self.root)
             self.root_rows[...] = self.root[:, None]  # a product with it needs no broadcast buffer
+            self._steady_stale = True
         return True
 
     def cost(self, scale: float) -> None:
         """``hessian = (R A)^T (R A)`` and ``gradient = (R A)^T (s R b)`` (the negated ``g``)."""
-        np.multiply(self.matrix, self.root_rows, out=self.scaled)
+        matrix, root_rows, scaled, scaled_transposed = self._moving
+        np.multiply(matrix, root_rows, out=scaled)
+        np.dot(scaled_transposed, scaled, out=self.hessian)  # BLAS, no temporary (matmul has one)
+        if self._steady_stale:  # the steady rows' scaled copy and their part of H, once
+            np.multiply(self.matrix, self.root_rows, out=self.scaled)
+            np.dot(self._steady[1], self._steady[0], out=self.steady_hessian)
+            self._steady_stale = False
+        self.hessian += self.steady_hessian
         np.multiply(self.vector, self.root, out=self.scaled_vector)
         if scale != 1.0:
             self.scaled_vector *= scale
-        np.dot(self._scaled_transposed, self.scaled, out=self.hessian)  # BLAS, no temporary (matmul has one)
         np.dot(self._scaled_transposed, self.scaled_vector, out=self.gradient)
 
 
@@ -259,6 +291,7 @@ class _ContactBlock:
             ws.upper[friction]
         self.written: tuple[object, ...] = ()  # the constant arrays last written
         self.negated_generator = -contact.force_generator
+        self.force_reference = False  # a force reference was written into the gradient
 
     def write_constant_rows(self, contact: ContactConstraint) -> None:
         """Friction rows and bounds, force regularisation (constant: written again only when the
@@ -271,18 +304,27 @@ class _ContactBlock:
         self.written = (contact.friction_matrix, contact.friction_lower, contact.friction_upper,
                         contact.force_weight, contact.force_generator)
 
-    def write(self, contact: ContactConstraint) -> None:
-        """The contact's columns of the dynamics and torque rows, and its motion rows."""
+    def write(self, contact: ContactConstraint, scale: float) -> bool:
+        """The contact's columns of the dynamics and torque rows, its motion rows and its force
+        reference ``-2 w_c s f*_c`` in the gradient; True if its constant rows were written again."""
         written = self.written
-        if (contact.friction_matrix is not written[0] or contact.friction_lower is not written[1]
-                or contact.friction_upper is not written[2] or contact.force_weight != written[3]
-                or contact.force_generator is not written[4]):
+        rewritten = (contact.friction_matrix is not written[0] or contact.friction_lower is not written[1]
+                     or contact.friction_upper is not written[2] or contact.force_weight != written[3]
+                     or contact.force_generator is not written[4])
+        if rewritten:
             self.write_constant_rows(contact)
         np.dot(contact.jacobian.T, self.negated_generator, out=self.generalized)
         self.dynamics[...] = self.base_part
         self.torque[...] = self.joint_part
         self.motion_matrix[...] = contact.jacobian
         self.motion_rhs[...] = contact.motion_rhs
+        if contact.force_reference is not None:
+            np.multiply(contact.force_reference, -2.0 * contact.force_weight * scale, out=self.force_gradient)
+            self.force_reference = True
+        elif self.force_reference:
+            self.force_gradient.fill(0.0)
+            self.force_reference = False
+        return rewritten
 
 
 class Workspace:
@@ -303,9 +345,10 @@ class Workspace:
         n_eq = nu + sum(len(c.motion_rhs) for c in contacts)
         n_free = sum(len(c.friction_lower) for c in contacts) + passivity_row
         self.n, self.n_free = n, n_free
-        self.H, self.g = np.zeros((n, n)), np.zeros(n)
-        self.A, self.b = np.zeros((n_eq, n)), np.zeros(n_eq)
-        self.C, self.lower, self.upper = np.zeros((n_free + na, n)), np.zeros(n_free + na), np.zeros(n_free + na)
+        n_in = n_free + na
+        shapes = ((n, n), (n,), (n_eq, n), (n_eq,), (n_in, n), (n_in,), (n_in,))
+        self.data = np.zeros(sum(math.prod(shape) for shape in shapes))  # one buffer: one finiteness check
+        self.H, self.g, self.A, self.b, self.C, self.lower, self.upper = _views(self.data, shapes)
         self.torque_rows = self.C[n_free:]
         self.torque_lower, self.torque_upper = self.lower[n_free:], self.upper[n_free:]
         self.hessian_block, self.gradient_block = self.H[:nv, :nv], self.g[:nv]
@@ -316,7 +359,7 @@ class Workspace:
         self.full = (self.H, self.g, self.A, self.b, self.C, self.lower, self.upper)
         self.without_limits = (self.H, self.g, self.A, self.b, self.C[:n_free], self.lower[:n_free],
                                self.upper[:n_free])
-        self.free = WarmStartedQP(n, n_eq, n_free, qp.eps_abs, qp.max_iterations)
+        self.free = WarmStartedQP(n, n_eq, n_free, qp.eps_abs, qp.max_iterations, qp.rho)
         self.limited: WarmStartedQP | None = None  # made at the first tick a torque limit binds
         column, row, friction_row = nv, nu, 0
         self.blocks: list[_ContactBlock] = []
@@ -331,8 +374,18 @@ class Workspace:
     def limited_qp(self, qp: InverseDynamicsQP) -> WarmStartedQP:
         """The problem with the torque rows (made on first use)."""
         if self.limited is None:
-            self.limited = WarmStartedQP(self.n, len(self.b), len(self.lower), qp.eps_abs, qp.max_iterations)
+            self.limited = WarmStartedQP(self.n, len(self.b), len(self.lower), qp.eps_abs, qp.max_iterations, qp.rho)
         return self.limited
+
+
+def _views(buffer: np.ndarray, shapes: tuple[tuple[int, ...], ...]) -> list[np.ndarray]:
+    """Consecutive C-contiguous views of ``buffer`` with the given shapes."""
+    views, start = [], 0
+    for shape in shapes:
+        size = math.prod(shape)
+        views.append(buffer[start:start + size].reshape(shape))
+        start += size
+    return views
 
 
 class InverseDynamicsQP:
@@ -340,19 +393,22 @@ class InverseDynamicsQP:
     of them unactuated (6 for a free-flyer base), and torque limits ``effort_limit``.
 
     One :class:`Workspace` per set of active contacts (the problem's size), its matrices filled
-    in place; one :class:`TaskRows` per list of task sizes.
+    in place; one :class:`TaskRows` per list of task sizes and set of steady tasks.
     """
 
     def __init__(self, nv: int, n_unactuated: int, effort_limit: np.ndarray, *, eps_abs: float = DEFAULT_EPS_ABS,
-                 max_iterations: int = 1000, acceleration_weight: float = 1e-6):
+                 max_iterations: int = 1000, acceleration_weight: float = 1e-6, rho: float = PROXIMAL_RHO):
         self.nv, self.nu = nv, n_unactuated
         self.na = nv - n_unactuated
         self.effort_limit = np.asarray(effort_limit, dtype=float)
         self._negative_limit = -self.effort_limit
-        self.eps_abs, self.max_iterations = eps_abs, max_iterations
+        self.eps_abs, self.max_iterations, self.rho = eps_abs, max_iterations, rho
         self.acceleration_weight = acceleration_weight
         self._workspaces: dict[tuple[object, ...], Workspace] = {}
-        self._task_rows: dict[tuple[int, ...], TaskRows] = {}
+        self._task_rows: dict[tuple[tuple[int, ...], tuple[bool, ...]], TaskRows] = {}
+        self._previous_tasks: list[tuple[object, object]] = []  # each task's matrix and weights at the last tick
+        self._steady: tuple[bool, ...] = ()
+        self._tasks_tick: int | None = None
         self._passivity_row = np.zeros(0)
 
     # -- assembly ----------------------------------------------------------------------------
@@ -364,22 +420,32 @@ class InverseDynamicsQP:
             ws = self._workspaces[key] = Workspace(self, contacts, passivity_row)
         return ws
 
-    def task_rows(self, tasks: list[TaskEquation]) -> TaskRows:
-        """The stacked rows for this list of task sizes."""
-        sizes = tuple(len(task.vector) for task in tasks)
-        rows = self._task_rows.get(sizes)
+    def task_rows(self, tasks: list[TaskEquation], tick: int | None = None) -> TaskRows:
+        """The stacked rows for this list of task sizes and this tick's steady tasks: those whose
+        matrix and weights are the same arrays as at the previous tick (or, without a tick, the
+        previous call); further calls in the same tick keep the tick's first answer."""
+        if tick is None or tick != self._tasks_tick:
+            previous = self._previous_tasks
+            self._steady = tuple(i < len(previous) and task.matrix is previous[i][0] and task.weight is previous[i][1]
+                                 for i, task in enumerate(tasks))
+            self._previous_tasks = [(task.matrix, task.weight) for task in tasks]
+            self._tasks_tick = tick
+        steady = self._steady if len(self._steady) == len(tasks) else (False,) * len(tasks)
+        key = (tuple(len(task.vector) for task in tasks), steady)
+        rows = self._task_rows.get(key)
         if rows is None:
-            rows = self._task_rows[sizes] = TaskRows(sizes, self.nv)
+            rows = self._task_rows[key] = TaskRows(*key, self.nv)
         return rows
 
     def assemble(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, tasks: list[TaskEquation],
-                 contacts: list[ContactConstraint], passivity: Passivity | None = None) -> Workspace:
+                 contacts: list[ContactConstraint], passivity: Passivity | None = None,
+                 tick: int | None = None) -> Workspace:
         """Fill the workspace for this tick's problem (see the module docstring); a task whose
         rows do not fit its block, or whose weights are negative, raises ``ValueError``."""
         scale = 1.0 if passivity is None else passivity.scale
         bounded = passivity is not None and passivity.power_bound is not None
         ws = self.workspace(contacts, bounded)
-        rows = self.task_rows(tasks)
+        rows = self.task_rows(tasks, tick)
         if not rows.write(tasks):
             raise ValueError("negative task weights (the cost would not be convex)")
         rows.cost(scale)
@@ -393,13 +459,11 @@ class InverseDynamicsQP:
         np.subtract(self._negative_limit, bias_forces[nu:], out=ws.torque_lower)
         np.subtract(self.effort_limit, bias_forces[nu:], out=ws.torque_upper)
         for contact, block in zip(contacts, ws.blocks, strict=True):
-            block.write(contact)
-            if contact.force_reference is not None:  # -2 w_c s f*_c
-                np.multiply(contact.force_reference, -2.0 * contact.force_weight * scale, out=block.force_gradient)
-            else:
-                block.force_gradient.fill(0.0)
+            if block.write(contact, scale):
+                ws.free.inequalities_changed = True
         if bounded:
             self._write_passivity_row(ws, passivity, bias_forces)
+            ws.free.inequalities_changed = True
         return ws
 
     def _write_passivity_row(self, ws: Workspace, passivity: Passivity, bias_forces: np.ndarray) -> None:
@@ -430,7 +494,7 @@ class InverseDynamicsQP:
         raises on a numerical failure (then ``status`` says why and ``tau`` is None: the caller
         chooses the fallback)."""
         start = time.perf_counter()
-        ws = self.assemble(mass_matrix, bias_forces, tasks, contacts, passivity)
+        ws = self.assemble(mass_matrix, bias_forces, tasks, contacts, passivity, tick)
         if not self._finite(ws):
             return self._failed(NOT_FINITE, 0, contacts, start)
         status, iterations = ws.free.solve(ws.without_limits, tick)
@@ -440,6 +504,7 @@ class InverseDynamicsQP:
             limited = self._beyond_limits(ws, tau)
             if limited:
                 qp = ws.limited_qp(self)  # from this tick's answer without the limits
+                qp.inequalities_changed = True  # the torque rows change every tick
                 status, more = qp.solve(ws.full, tick, start=ws.free.latest)
                 iterations += more
                 if status == SOLVED:
@@ -447,21 +512,17 @@ class InverseDynamicsQP:
         if status != SOLVED:
             return self._failed(status, iterations, contacts, start)
         x = (ws.limited if limited else ws.free).latest[0].copy()
-        solution = QPSolution(x[:self.nv], tau, self._split_forces(x, contacts), SOLVED, iterations,
-                              time.perf_counter() - start, 0.0, contacts, torque_limited=limited)
-        solution.objective = float((ws.limited if limited else ws.free).qp.results.info.objValue)
-        return solution
+        return QPSolution(x[:self.nv], tau, self._split_forces(x, contacts), SOLVED, iterations,
+                          time.perf_counter() - start, contacts, torque_limited=limited)
 
     def _finite(self, ws: Workspace) -> bool:
-        """Whether the problem is finite (a NaN or inf makes a squared norm non-finite; the bounds
-        are finite up to +-INFINITY, the upper torque bounds exactly when the lower ones are)."""
-        vdot = np.vdot
-        return math.isfinite(vdot(ws.H, ws.H) + vdot(ws.g, ws.g) + vdot(ws.A, ws.A) + vdot(ws.b, ws.b)
-                             + vdot(ws.C, ws.C) + vdot(ws.torque_lower, ws.torque_lower))
+        """Whether the problem is finite: a NaN or inf makes the squared norm of its one buffer
+        non-finite (the "no bound" of +-INFINITY squares to 1e40, far below overflow)."""
+        return math.isfinite(np.vdot(ws.data, ws.data))
 
     def _torques(self, ws: Workspace, x: np.ndarray, bias_forces: np.ndarray) -> np.ndarray:
         """``tau = (torque rows) x + h_j`` (the torque rows are ``[M_j, -(J^T T)_j]``)."""
-        tau = ws.torque_rows @ x
+        tau = np.dot(ws.torque_rows, x)
         tau += bias_forces[self.nu:]
         return tau
 
