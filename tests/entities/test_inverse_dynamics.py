@@ -28,9 +28,12 @@ def dynamics_residual(graph, t=0):
     return np.abs(state.mass_matrix @ solution.acceleration + state.bias_forces - generalized - torque).max()
 
 
-def exact_solution(workspace):
-    """The same QP solved by daqp (dual active set, exact to machine precision)."""
-    ws = workspace
+def exact_solution(graph):
+    """The solver's QP at tick 0, torque-limit rows included, solved by daqp (dual active set,
+    exact to machine precision); and its workspace."""
+    qp = graph["solver"]._qp
+    ws = next(iter(qp._workspaces.values()))
+    qp.write_torque_bounds(ws, graph["robot"].state(0).bias_forces)  # written by the solver only when needed
     n_eq = len(ws.b)
     A = np.vstack([ws.A, ws.C])
     upper = np.r_[ws.b, ws.upper]
@@ -38,7 +41,7 @@ def exact_solution(workspace):
     sense = np.r_[np.full(n_eq, 5), np.zeros(len(ws.upper))].astype(np.int32)  # 5: equality
     x, _, exitflag, _ = daqp.solve(ws.H, ws.g, A, upper, lower, sense)
     assert exitflag == 1
-    return x
+    return x, ws
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -50,8 +53,7 @@ def test_solution_matches_an_exact_solver_and_satisfies_the_dynamics(seed):
     solver = graph["solver"]
     solution = solver.solution(0)
     assert solution.status == SOLVED and not solution.torque_limited
-    workspace = next(iter(solver._qp._workspaces.values()))
-    x = exact_solution(workspace)
+    x, _ = exact_solution(graph)
     assert np.abs(np.r_[solution.acceleration, np.concatenate(solution.forces)] - x).max() < 1e-4
     assert dynamics_residual(graph) < 1e-6
 
@@ -65,8 +67,7 @@ def test_the_default_tolerance_moves_the_torques_by_less_than_a_tenth_of_a_newto
     graph = build(q, v)
     solver = graph["solver"]
     solution = solver.solution(0)
-    workspace = next(iter(solver._qp._workspaces.values()))
-    x = exact_solution(workspace)
+    x, workspace = exact_solution(graph)
     exact_tau = workspace.torque_rows @ x + graph["robot"].state(0).bias_forces[6:]
     assert solver.eps_abs == 1e-6 and solution.status == SOLVED
     assert np.abs(solution.acceleration - x[:38]).max() < 1e-4

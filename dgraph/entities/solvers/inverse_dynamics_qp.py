@@ -71,7 +71,8 @@ _PROXQP_STATUS = {
 
 
 _largest = np.maximum.reduce
-"""The largest entry of an array (the ufunc itself: ``ndarray.max`` adds microseconds of wrapping)."""
+"""The largest entry of an array, NaN if one is NaN (the ufunc itself: ``ndarray.max`` adds
+microseconds of wrapping)."""
 
 
 def proxqp_status(results: object) -> int:
@@ -445,9 +446,11 @@ class InverseDynamicsQP:
 
     def assemble(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, tasks: list[TaskEquation],
                  contacts: list[ContactConstraint], passivity: Passivity | None = None,
-                 tick: int | None = None) -> Workspace:
+                 tick: int | None = None, torque_bounds: bool = True) -> Workspace:
         """Fill the workspace for this tick's problem (see the module docstring); a task whose
-        rows do not fit its block, or whose weights are negative, raises ``ValueError``."""
+        rows do not fit its block, or whose weights are negative, raises ``ValueError``.
+        ``torque_bounds=False`` leaves the bounds of the torque rows (:meth:`write_torque_bounds`)
+        for the ticks that need them."""
         scale = 1.0 if passivity is None else passivity.scale
         bounded = passivity is not None and passivity.power_bound is not None
         ws = self.workspace(contacts, bounded)
@@ -459,8 +462,8 @@ class InverseDynamicsQP:
         ws.base_dynamics[...] = mass_matrix[:nu]  # dynamics (floating-base rows) and torque rows share [M, -J_c^T T]
         np.negative(bias_forces[:nu], out=ws.base_rhs)
         ws.torque_acceleration[...] = mass_matrix[nu:]
-        np.subtract(self._negative_limit, bias_forces[nu:], out=ws.torque_lower)
-        np.subtract(self.effort_limit, bias_forces[nu:], out=ws.torque_upper)
+        if torque_bounds:
+            self.write_torque_bounds(ws, bias_forces)
         for contact, block in zip(contacts, ws.blocks, strict=True):
             if block.write(contact, scale):
                 ws.free.inequalities_changed = True
@@ -468,6 +471,11 @@ class InverseDynamicsQP:
             self._write_passivity_row(ws, passivity, bias_forces)
             ws.free.inequalities_changed = True
         return ws
+
+    def write_torque_bounds(self, ws: Workspace, bias_forces: np.ndarray) -> None:
+        """``tau_min - h_j <= (torque rows) x <= tau_max - h_j``."""
+        np.subtract(self._negative_limit, bias_forces[self.nu:], out=ws.torque_lower)
+        np.subtract(self.effort_limit, bias_forces[self.nu:], out=ws.torque_upper)
 
     def _write_passivity_row(self, ws: Workspace, passivity: Passivity, bias_forces: np.ndarray) -> None:
         """``-v_j^T tau >= H_dot`` with ``tau = (torque rows) x + h_j``, divided by the row's norm
@@ -497,21 +505,22 @@ class InverseDynamicsQP:
         raises on a numerical failure (then ``status`` says why and ``tau`` is None: the caller
         chooses the fallback)."""
         start = time.perf_counter()
-        ws = self.assemble(mass_matrix, bias_forces, tasks, contacts, passivity, tick)
-        if not self._finite(ws):
+        ws = self.assemble(mass_matrix, bias_forces, tasks, contacts, passivity, tick, torque_bounds=False)
+        if not self._finite(ws):  # h_j, which only the torques and their bounds see, is checked with the torques
             return self._failed(NOT_FINITE, 0, contacts, start)
         status, iterations = ws.free.solve(ws.without_limits, tick)
         limited = False
         if status == SOLVED:
             tau = self._torques(ws, ws.free.latest[0], bias_forces)
-            limited = self._beyond_limits(ws, tau)
+            excess = self._excess(ws, tau)
+            if excess != excess:  # NaN: h_j is not finite
+                return self._failed(NOT_FINITE, iterations, contacts, start)
+            limited = excess > self.eps_abs
             if limited:
-                qp = ws.limited_qp(self)  # from this tick's answer without the limits
-                qp.inequalities_changed = True  # the torque rows change every tick
-                status, more = qp.solve(ws.full, tick, start=ws.free.latest)
+                status, more = self._solve_with_limits(ws, bias_forces, tick)
                 iterations += more
                 if status == SOLVED:
-                    tau = self._torques(ws, qp.latest[0], bias_forces)
+                    tau = self._torques(ws, ws.limited.latest[0], bias_forces)
         if status != SOLVED:
             return self._failed(status, iterations, contacts, start)
         x = (ws.limited if limited else ws.free).latest[0].copy()
@@ -529,12 +538,21 @@ class InverseDynamicsQP:
         tau += bias_forces[self.nu:]
         return tau
 
-    def _beyond_limits(self, ws: Workspace, tau: np.ndarray) -> bool:
-        """Whether some ``|tau_j|`` exceeds its limit by more than ProxQP's tolerance."""
+    def _excess(self, ws: Workspace, tau: np.ndarray) -> float:
+        """``max_j |tau_j| - tau_max,j``: positive when a limit is exceeded, NaN when ``tau`` has a NaN."""
         excess = ws.tau_excess
         np.abs(tau, out=excess)
         excess -= self.effort_limit
-        return bool(_largest(excess) > self.eps_abs)
+        return float(_largest(excess))
+
+    def _solve_with_limits(self, ws: Workspace, bias_forces: np.ndarray, tick: int | None) -> tuple[int, int]:
+        """The QP with its torque rows, from this tick's answer without them."""
+        self.write_torque_bounds(ws, bias_forces)
+        if not math.isfinite(np.vdot(ws.torque_upper, ws.torque_upper)):
+            return NOT_FINITE, 0
+        qp = ws.limited_qp(self)
+        qp.inequalities_changed = True  # the torque rows change every tick
+        return qp.solve(ws.full, tick, start=ws.free.latest)
 
     def _failed(self, status: int, iterations: int, contacts: list[ContactConstraint], start: float) -> QPSolution:
         return QPSolution(np.zeros(self.nv), None, [np.zeros(c.n_forces) for c in contacts], status, iterations,
