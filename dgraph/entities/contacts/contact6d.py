@@ -9,6 +9,7 @@ import dgraph as dg
 from dgraph.entities.contacts.anchoring import AnchoredContact
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.robot.robot_state import LOCAL, FrameReader
+from dgraph.entities.robot.rotations import Rows, log3_product
 from dgraph.entities.tasks.gains import Gains
 
 
@@ -41,6 +42,29 @@ def friction_pyramid(n_corners: int, mu: float) -> np.ndarray:
     for i in range(n_corners):
         rows[4 * i:4 * i + 4, 3 * i:3 * i + 3] = faces
     return rows
+
+
+def placement_error(rotation: Rows, translation: list[float], anchor_rotation_t: Rows,
+                    anchor_translation: list[float]) -> list[float]:
+    """``e = [R^T (p - p_a), log3(R_a^T R)]`` (local frame) from Python floats: the placement
+    ``(R, p)`` of the frame against the anchor ``(R_a, p_a)``, given ``R_a^T``."""
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation
+    (p0, p1, p2), (a0, a1, a2) = translation, anchor_translation
+    d0, d1, d2 = p0 - a0, p1 - a1, p2 - a2
+    return [r00 * d0 + r10 * d1 + r20 * d2, r01 * d0 + r11 * d1 + r21 * d2, r02 * d0 + r12 * d1 + r22 * d2,
+            *log3_product(anchor_rotation_t, rotation)]
+
+
+def motion_rhs(kp: list[float], kd: list[float], error: list[float], velocity: list[float],
+               drift: list[float]) -> np.ndarray:
+    """``-Kp e - Kd V - J_dot v`` row by row (six rows, written out: cheaper than a comprehension)."""
+    k0, k1, k2, k3, k4, k5 = kp
+    d0, d1, d2, d3, d4, d5 = kd
+    e0, e1, e2, e3, e4, e5 = error
+    v0, v1, v2, v3, v4, v5 = velocity
+    a0, a1, a2, a3, a4, a5 = drift
+    return np.array((-k0 * e0 - d0 * v0 - a0, -k1 * e1 - d1 * v1 - a1, -k2 * e2 - d2 * v2 - a2,
+                     -k3 * e3 - d3 * v3 - a3, -k4 * e4 - d4 * v4 - a4, -k5 * e5 - d5 * v5 - a5))
 
 
 @dg.register
@@ -94,35 +118,43 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
         self._gains = Gains(self)
         self._lower = np.concatenate([np.full(len(pyramid), -np.inf), [self.min_normal_force]])
         self._upper = np.concatenate([np.zeros(len(pyramid)), [self.max_normal_force]])
-        self._anchor: tuple[pin.SE3, np.ndarray, np.ndarray] | None = None  # the anchor taken apart
+        self._anchor: tuple[pin.SE3, list[list[float]], list[float]] | None = None  # the anchor taken apart
+        self._gain_floats: tuple[np.ndarray, np.ndarray, list[float], list[float]] | None = None
 
     def here(self, t: int) -> pin.SE3:
         """The frame's placement at ``t`` (a copy)."""
         state = self.robot(t)
         return state.frame_placement(self.frame_index(state))
 
-    def _anchor_terms(self, t: int) -> tuple[np.ndarray, np.ndarray]:
-        """``(R_a^T, p_a)`` of the anchor, taken apart once per anchor."""
+    def _anchor_terms(self, t: int) -> tuple[list[list[float]], list[float]]:
+        """``(R_a^T, p_a)`` of the anchor as Python floats, taken apart once per anchor."""
         anchor = self.anchor_or_here(t)
         cached = self._anchor
         if cached is None or cached[0] is not anchor:
-            cached = self._anchor = (anchor, anchor.rotation.T.copy(), anchor.translation)
+            cached = self._anchor = (anchor, anchor.rotation.T.tolist(), anchor.translation.tolist())
         return cached[1], cached[2]
+
+    def _gain_lists(self, t: int) -> tuple[list[float], list[float]]:
+        """``Kp``, ``Kd`` (6 each) as Python floats, converted again only for new gain vectors."""
+        kp, kd = self._gains.vector("kp", 6, t), self._gains.vector("kd", 6, t)
+        cached = self._gain_floats
+        if cached is None or cached[0] is not kp or cached[1] is not kd:
+            cached = self._gain_floats = (kp, kd, kp.tolist(), kd.tolist())
+        return cached[2], cached[3]
 
     @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "anchor"))
     def contact(self, t: int) -> ContactConstraint:
-        """Motion rows, force generator and friction rows at ``t``."""
+        """Motion rows, force generator and friction rows at ``t``: ``J a = -Kp e - Kd V - J_dot v``
+        (Eq. 4.10 with the drift correction), ``e`` and the right-hand side in Python floats (six
+        rows: cheaper than numpy's per-call cost)."""
         state = self.robot(t)
         frame = state.frame(self.frame_index(state), LOCAL)
-        anchor_rotation_t, anchor_translation = self._anchor_terms(t)
         rotation = frame.rotation
-        error = np.concatenate([rotation.T @ (frame.translation - anchor_translation),
-                                pin.log3(anchor_rotation_t @ rotation)])
-        kp, kd = self._gains.vector("kp", 6, t), self._gains.vector("kd", 6, t)
-        desired = -kp * error - kd * frame.velocity
-        return ContactConstraint(self.name, bool(self.active(t)), frame.jacobian, desired - frame.drift,
-                                 self._generator, self._friction, self._lower, self._upper, self.force_weight,
-                                 rotation, error)
+        error = placement_error(rotation.tolist(), frame.translation.tolist(), *self._anchor_terms(t))
+        rhs = motion_rhs(*self._gain_lists(t), error, frame.velocity.tolist(), frame.drift.tolist())
+        return ContactConstraint(self.name, bool(self.active(t)), frame.jacobian, rhs, self._generator,
+                                 self._friction, self._lower, self._upper, self.force_weight, rotation,
+                                 np.array(error))
 
     @dg.output(shape=(6,), depends=("contact",))
     def error(self, t: int) -> np.ndarray:
