@@ -7,12 +7,8 @@ import pinocchio as pin
 
 import dgraph as dg
 from dgraph.entities.features.feature import Feature, FeatureValue, parse_mask
-from dgraph.entities.robot.robot_state import WORLD, FrameReader, RobotState
-
-
-def orientation_error(rotation: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """``log3(R R*^T)``: the rotation vector (world axes) taking ``R*`` to ``R``."""
-    return pin.log3(rotation @ reference.T)
+from dgraph.entities.robot.robot_state import WORLD, FrameKinematics, FrameReader, RobotState
+from dgraph.entities.robot.rotations import log3_product
 
 
 @dg.register
@@ -49,11 +45,11 @@ class FramePose(FrameReader, Feature):
         self._block = slice(0 if position else 3, 6 if orientation else 3)
         self.rows = parse_mask(self, self.mask[self._block], self._block.stop - self._block.start)
         self.size = self.mask.count("1")
-        self._reference: tuple[np.ndarray, np.ndarray] | None = None  # (quaternion, R*) last converted
+        self._reference: tuple[np.ndarray, list[list[float]]] | None = None  # (quaternion, R*^T) last converted
 
-    def _reference_rotation(self, t: int) -> np.ndarray:
-        """``R*`` from the reference quaternion (normalised), converted again only when the
-        quaternion is not the same constant as last time."""
+    def _reference_rotation(self, t: int) -> list[list[float]]:
+        """``R*^T`` (rows of floats) from the reference quaternion (normalised), converted again
+        only when the quaternion is not the same constant as last time."""
         quat = self.reference_orientation(t)
         cached = self._reference
         if cached is not None and cached[0] is quat and self.reference_orientation.source is None:
@@ -62,20 +58,25 @@ class FramePose(FrameReader, Feature):
         if not norm > 1e-9:
             raise dg.SpecError(f"{self.name}.reference_orientation is not a unit quaternion: {quat}",
                                entity=self.name, signal="reference_orientation")
-        rotation = pin.Quaternion(quat / norm).toRotationMatrix()
-        self._reference = (quat, rotation)
-        return rotation
+        rows = pin.Quaternion(quat / norm).toRotationMatrix().T.tolist()
+        self._reference = (quat, rows)
+        return rows
+
+    def _error(self, frame: FrameKinematics, t: int) -> np.ndarray:
+        """``[p - p*, log3(R R*^T)]`` on the half (or both) the mask keeps rows of; the logarithm
+        in Python floats (:func:`~dgraph.entities.robot.rotations.log3_product`)."""
+        block = self._block
+        if block.stop == 3:
+            return frame.translation - self.reference_position(t)
+        orientation = log3_product(frame.rotation.tolist(), self._reference_rotation(t))
+        if block.start == 3:
+            return np.array(orientation)
+        return np.concatenate([frame.translation - self.reference_position(t), orientation])
 
     def evaluate(self, state: RobotState, t: int) -> FeatureValue:
         """Pose error and its derivatives on SE(3), world axes, on the half the mask keeps rows of
         (both halves: all six rows)."""
         frame = state.frame(self.frame_index(state), WORLD)
         block = self._block
-        parts = []
-        if block.start == 0:
-            parts.append(frame.translation - self.reference_position(t))
-        if block.stop == 6:
-            parts.append(orientation_error(frame.rotation, self._reference_rotation(t)))
-        error = parts[0] if len(parts) == 1 else np.concatenate(parts)
-        return FeatureValue(error, frame.velocity[block] - self.reference_velocity(t)[block], frame.jacobian[block],
-                            frame.drift[block], self.reference_acceleration(t)[block])
+        return FeatureValue(self._error(frame, t), frame.velocity[block] - self.reference_velocity(t)[block],
+                            frame.jacobian[block], frame.drift[block], self.reference_acceleration(t)[block])
