@@ -142,6 +142,27 @@ def test_each_quantity_is_computed_once_per_state_and_matches_pinocchio(model):
     np.testing.assert_array_equal(state.frame(fid, LOCAL).drift, local_drift)
     np.testing.assert_array_equal(sole.drift, pin.getFrameClassicalAcceleration(model, data, fid, WORLD).vector)
     np.testing.assert_array_equal(state.centroidal_momentum, data.Ag @ v)
+    drift = pin.computeCentroidalMomentumTimeVariation(model, data, q, v, np.zeros(model.nv)).vector
+    np.testing.assert_allclose(state.centroidal_drift, drift, rtol=1e-12, atol=1e-10)  # dA_G v: the same rate
+
+
+def test_the_mass_matrix_outputs_are_copies_that_outlive_the_pass(model):
+    g = dg.Graph(dt=0.001)
+    robot = g.add(RobotModel("robot"))
+    q, v = random_state(model, 8)
+    robot.q.set(q)
+    robot.v.set(v)
+    mass, bias = robot.mass_matrix(0), robot.bias_forces(0)
+    state = robot.state(0)
+    assert np.shares_memory(state.mass_matrix, state.data.M) and not np.shares_memory(mass, state.data.M)
+    np.testing.assert_array_equal(mass, state.mass_matrix)
+    np.testing.assert_array_equal(bias, state.bias_forces)
+    robot.q.set(pin.neutral(model))
+    robot.mass_matrix(0)  # a new pass on the shared data: the values handed out before do not move
+    data = model.createData()
+    pin.computeAllTerms(model, data, q, v)
+    np.testing.assert_array_equal(mass, data.M.T)
+    np.testing.assert_array_equal(bias, data.nle)
 
 
 def test_bad_frame_and_model_are_clear_errors():
@@ -168,7 +189,8 @@ def test_a_state_kept_past_its_pass_raises_instead_of_answering_for_another(mode
     com, placement, sole = old.com, old.frame_placement(fid), old.frame(fid)
     robot.q.set(pin.neutral(model))
     robot.state(0)  # a new pass on the shared data
-    reads = (lambda: old.centroidal_drift, lambda: old.frame(fid, LOCAL), lambda: old.frame_placement(fid))
+    reads = (lambda: old.centroidal_drift, lambda: old.frame(fid, LOCAL), lambda: old.frame_placement(fid),
+             lambda: old.mass_matrix, lambda: old.bias_forces)  # views of the data: they would answer for the new pass
     for read in reads:
         with pytest.raises(dg.DGraphError, match="read after its Pinocchio data was reused"):
             read()

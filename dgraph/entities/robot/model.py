@@ -118,13 +118,13 @@ class RobotModel(dg.Entity):
 
     @dg.output(shape=("nv", "nv"), depends=("state",))
     def mass_matrix(self, t: int) -> np.ndarray:
-        """``M(q)``, symmetric."""
-        return self.state(t).mass_matrix
+        """``M(q)``, symmetric (a copy: the state's is a view of the data that the next pass refills)."""
+        return self.state(t).mass_matrix.copy()
 
     @dg.output(shape=("nv",), depends=("state",))
     def bias_forces(self, t: int) -> np.ndarray:
-        """``h = C(q, v) v + g(q)``."""
-        return self.state(t).bias_forces
+        """``h = C(q, v) v + g(q)`` (a copy, like ``mass_matrix``)."""
+        return self.state(t).bias_forces.copy()
 
     @dg.output(shape=(3,), depends=("state",), labels=("x", "y", "z"))
     def com_position(self, t: int) -> np.ndarray:

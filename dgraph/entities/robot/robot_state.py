@@ -81,21 +81,37 @@ class RobotState:
     """Kinematics and dynamics of ``model`` at ``(q, v)``, computed once.
 
     The constructor runs ``computeAllTerms`` (mass matrix, nonlinear effects, joint Jacobians,
-    CoM and its Jacobian, centroidal momentum matrix). Its forward pass leaves in ``data.a`` the
-    body accelerations at ``a = 0``, so frame accelerations read from it, and the CoM
-    acceleration computed from it, are the drifts ``J_dot v`` (checked by finite differences).
-    Attributes set by the constructor: ``mass_matrix``, ``bias_forces``.
-    Every other quantity is computed from that data at its first read and kept (a copy owned by
-    this state, shared by every reader of the tick): each is computed at most once per state.
+    CoM and its Jacobian, centroidal momentum matrix and its time derivative ``dA_G``). Its
+    forward pass leaves in ``data.a`` the body accelerations at ``a = 0``, so frame accelerations
+    read from it, and the CoM acceleration computed from it, are the drifts ``J_dot v`` (checked
+    by finite differences).
+    ``mass_matrix`` and ``bias_forces`` are views of the pass's data, for the readers of the tick
+    (the solver copies them into its QP); a read after the data was reused raises, and the
+    RobotModel outputs of the same names hand out copies. Every other quantity is computed from
+    that data at its first read and kept (a copy owned by this state, shared by every reader of
+    the tick): each is computed at most once per state.
     """
 
     def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray):
         self.model, self._pin_data, self.q, self.v = model, data, q, v
         setattr(data, _OWNER, weakref.ref(self))
         pin.computeAllTerms(model, data, q, v)  # also leaves data.a = the accelerations at a = 0
-        self.mass_matrix = data.M.T.copy()  # M is symmetric to the bit (checked by a test): one block copy
-        self.bias_forces = data.nle.copy()
+        self._mass_matrix = data.M.T  # M is symmetric to the bit (checked by a test): C-ordered as its transpose
+        self._bias_forces = data.nle
         self._frames: dict[tuple[int, pin.ReferenceFrame], FrameKinematics] = {}
+
+    @property
+    def mass_matrix(self) -> np.ndarray:
+        """``M(q)`` (nv x nv, symmetric): a view of the pass's data, valid while it is this state's
+        (copy it to keep it past the tick; a read after the data was reused raises)."""
+        self.data  # noqa: B018 -- the ownership check
+        return self._mass_matrix
+
+    @property
+    def bias_forces(self) -> np.ndarray:
+        """``h = C(q, v) v + g(q)`` (nv): a view of the pass's data, like :attr:`mass_matrix`."""
+        self.data  # noqa: B018 -- the ownership check
+        return self._bias_forces
 
     @property
     def data(self) -> pin.Data:
@@ -144,10 +160,9 @@ class RobotState:
 
     @computed_once
     def centroidal_drift(self) -> np.ndarray:
-        """``A_G_dot v``: the momentum rate at ``a = 0``, from the velocities and the accelerations
-        at ``a = 0`` of the pass (Pinocchio's variant without ``q, v, a``, which uses them; it
-        writes only the momentum fields of the data)."""
-        return pin.computeCentroidalMomentumTimeVariation(self.model, self.data).vector.copy()
+        """``A_G_dot v``: the momentum rate at ``a = 0`` (``h_G_dot = A_G a + A_G_dot v``), with
+        the pass's ``dA_G``."""
+        return self.data.dAg @ self.v
 
     def gravity_torque(self) -> np.ndarray:
         """``g(q)``, the generalized gravity (used by fallbacks; computed on request)."""
