@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import dgraph as dg
-from dgraph.entities.references import MinimumJerk, TrajectoryFile
+from dgraph.entities.references import MinimumJerk, Sinusoid, TrajectoryFile
 from dgraph.entities.references.trajectory_file import natural_spline_second_derivatives
 from tests.conftest import Ticker
 
@@ -212,3 +212,20 @@ def test_trajectory_files_with_a_bom_a_unit_header_or_the_wrong_arrays(tmp_path)
     np.savez(empty, time=np.arange(3.0), position=np.zeros((3, 0)))
     with pytest.raises(dg.ParamError, match=r"position has shape \(3, 0\)"):
         TrajectoryFile("t", path=str(empty))
+
+
+def test_a_sinusoid_3_vector_in_floats_is_the_array_computation_and_its_derivatives():
+    g = dg.Graph(dt=DT)
+    params = {"frequency": 0.5, "phase": 0.3, "ramp": 1.0}
+    point = g.add(Sinusoid("point", amplitude=[0.0, 0.05, -0.02], offset=[0.1, 0.2, 0.9], **params))
+    wide = g.add(Sinusoid("wide", amplitude=[0.0, 0.05, -0.02, 0.0], offset=[0.1, 0.2, 0.9, 0.0], **params))
+    assert point._floats is not None and wide._floats is None
+    for t in (0, 1, 400, 999, 1000, 1500):  # in the fade-in, at its end, after it
+        for name in ("output", "velocity", "acceleration"):
+            value = point.signal(name)(t)
+            assert isinstance(value, np.ndarray) and value.shape == (3,)
+            np.testing.assert_array_equal(value, wide.signal(name)(t)[:3])
+    for t in (500, 1500):  # central differences of the position and of the velocity
+        for low, high in (("output", "velocity"), ("velocity", "acceleration")):
+            slope = (point.signal(low)(t + 1) - point.signal(low)(t - 1)) / (2 * DT)
+            np.testing.assert_allclose(slope, point.signal(high)(t), atol=1e-5)
