@@ -28,8 +28,10 @@ WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 LOCAL = pin.ReferenceFrame.LOCAL
 
 
-_OWNER = "dgraph_state"
-"""The attribute of a Pinocchio data holding a weak reference to the state whose pass last filled it."""
+_OWNERS: dict[int, weakref.ref[RobotState]] = {}
+"""For each Pinocchio data (by ``id``), a weak reference to the state whose pass last filled it (a
+Python dict: an attribute set on the Pinocchio object costs four times more to write and read).
+A data lives at least as long as its states, so an ``id`` is reused only once they are gone."""
 
 
 class computed_once:
@@ -94,7 +96,8 @@ class RobotState:
 
     def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray):
         self.model, self._pin_data, self.q, self.v = model, data, q, v
-        setattr(data, _OWNER, weakref.ref(self))
+        self._key = id(data)
+        _OWNERS[self._key] = weakref.ref(self)
         pin.computeAllTerms(model, data, q, v)  # also leaves data.a = the accelerations at a = 0
         self._mass_matrix = data.M.T  # M is symmetric to the bit (checked by a test): C-ordered as its transpose
         self._bias_forces = data.nle
@@ -119,7 +122,7 @@ class RobotState:
         overwrites it, after which computing anything more from this state raises instead of
         answering for the other state (values already computed are this state's and stay valid)."""
         data = self._pin_data
-        owner = getattr(data, _OWNER)()
+        owner = _OWNERS[self._key]()
         if owner is not self and (owner is None or not (
                 np.array_equal(owner.q, self.q) and np.array_equal(owner.v, self.v))):
             raise DGraphError("a RobotState was read after its Pinocchio data was reused for another (q, v): "
