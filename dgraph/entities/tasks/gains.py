@@ -24,19 +24,25 @@ class Gains:
 
     def __init__(self, entity: dg.Entity):
         self.entity = entity
-        self._cache: dict[str, tuple[Any, Any, np.ndarray]] = {}  # name: (value object, its key, vector)
+        self._cache: dict[str, tuple[dg.Input, Any, Any, np.ndarray]] = {}  # name: (input, value, its key, vector)
 
     def vector(self, name: str, size: int, t: int) -> np.ndarray:
         """The input ``name`` at ``t`` as ``size`` values >= 0 (``SpecError`` naming it otherwise)."""
+        cached = self._cache.get(name)
+        if cached is not None:
+            inp, vector = cached[0], cached[3]
+            if inp(t) is cached[1] and inp.source is None and len(vector) == size:
+                return vector  # the same constant as last time
+        return self._read(name, size, t, cached)
+
+    def _read(self, name: str, size: int, t: int, cached: tuple[dg.Input, Any, Any, np.ndarray] | None) -> np.ndarray:
+        """A value that is not the constant last converted: compared by value, converted if new."""
         inp = getattr(self.entity, name)
         value = inp(t)
-        cached = self._cache.get(name)
-        fits = cached is not None and len(cached[2]) == size
-        if fits and value is cached[0] and inp.source is None:
-            return cached[2]
         key = value if type(value) is float else _bytes_key(value)
-        vector = cached[2] if fits and cached[1] == key else self._convert(name, value, size, t)
-        self._cache[name] = (value, key, vector)
+        fits = cached is not None and len(cached[3]) == size and cached[2] == key
+        vector = cached[3] if fits else self._convert(name, value, size, t)
+        self._cache[name] = (inp, value, key, vector)
         return vector
 
     def _convert(self, name: str, value: Any, size: int, t: int) -> np.ndarray:
