@@ -44,15 +44,15 @@ def friction_pyramid(n_corners: int, mu: float) -> np.ndarray:
     return rows
 
 
-def placement_error(rotation: Rows, translation: list[float], anchor_rotation_t: Rows,
-                    anchor_translation: list[float]) -> list[float]:
+def placement_error(placement: Rows, anchor_rotation_t: Rows, anchor_translation: list[float]) -> list[float]:
     """``e = [R^T (p - p_a), log3(R_a^T R)]`` (local frame) from Python floats: the placement
-    ``(R, p)`` of the frame against the anchor ``(R_a, p_a)``, given ``R_a^T``."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation
-    (p0, p1, p2), (a0, a1, a2) = translation, anchor_translation
+    ``[[R, p], [0, 1]]`` (rows of the 4 x 4 matrix) of the frame against the anchor ``(R_a, p_a)``,
+    given ``R_a^T``."""
+    (r00, r01, r02, p0), (r10, r11, r12, p1), (r20, r21, r22, p2), _ = placement
+    a0, a1, a2 = anchor_translation
     d0, d1, d2 = p0 - a0, p1 - a1, p2 - a2
     return [r00 * d0 + r10 * d1 + r20 * d2, r01 * d0 + r11 * d1 + r21 * d2, r02 * d0 + r12 * d1 + r22 * d2,
-            *log3_product(anchor_rotation_t, rotation)]
+            *log3_product(anchor_rotation_t, ((r00, r01, r02), (r10, r11, r12), (r20, r21, r22)))]
 
 
 def motion_rhs(kp: list[float], kd: list[float], error: list[float], velocity: list[float],
@@ -150,7 +150,7 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
         state = self.robot(t)
         frame = state.frame(self.frame_index(state), LOCAL)
         rotation = frame.rotation
-        error = placement_error(rotation.tolist(), frame.translation.tolist(), *self._anchor_terms(t))
+        error = placement_error(frame.placement.tolist(), *self._anchor_terms(t))
         rhs = motion_rhs(*self._gain_lists(t), error, frame.velocity.tolist(), frame.drift.tolist())
         return ContactConstraint(self.name, bool(self.active(t)), frame.jacobian, rhs, self._generator,
                                  self._friction, self._lower, self._upper, self.force_weight, rotation,
