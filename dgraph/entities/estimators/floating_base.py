@@ -23,11 +23,13 @@ from dgraph.entities.robot.robot_state import load_model
 class Estimate:
     """Everything computed at one tick (the ``estimate`` output); read-only for readers."""
 
-    __slots__ = ("anchors", "base_velocity_world", "contacts", "next_position", "next_velocity", "q", "v")
+    __slots__ = ("anchored", "anchors", "base_velocity_world", "contacts", "next_position", "next_velocity", "q",
+                 "v")
 
-    def __init__(self, q: np.ndarray, v: np.ndarray, contacts: list[bool], anchors: list[np.ndarray | None],
-                 base_velocity_world: np.ndarray, next_velocity: np.ndarray, next_position: np.ndarray):
-        self.q, self.v, self.contacts, self.anchors = q, v, contacts, anchors
+    def __init__(self, q: np.ndarray, v: np.ndarray, contacts: list[bool], anchored: list[bool],
+                 anchors: list[np.ndarray | None], base_velocity_world: np.ndarray, next_velocity: np.ndarray,
+                 next_position: np.ndarray):
+        self.q, self.v, self.contacts, self.anchored, self.anchors = q, v, contacts, anchored, anchors
         self.base_velocity_world = base_velocity_world
         self.next_velocity, self.next_position = next_velocity, next_position
 
@@ -199,7 +201,7 @@ class FloatingBaseEstimator(dg.Entity):
         w_b = _minus(_times(r_bi, self.imu_angular_velocity(t).tolist()), kin.angular_velocity(imu))  # (2)
         forces = (_dot(r_wb[2], _times(kin.rotation[ft_left].tolist(), self.ft_left_ankle(t)[:3].tolist())),
                   _dot(r_wb[2], _times(kin.rotation[ft_right].tolist(), self.ft_right_ankle(t)[:3].tolist())))  # (3)
-        anchored = (self.anchored_left(t), self.anchored_right(t))
+        anchored = [self.anchored_left(t), self.anchored_right(t)]
         on, off = self.contact_force_on, self.contact_force_off
         contacts = [contact_hysteresis(forces[0], anchored[0], on, off),
                     contact_hysteresis(forces[1], anchored[1], on, off)]
@@ -219,10 +221,10 @@ class FloatingBaseEstimator(dg.Entity):
         v = np.empty(self.nv)
         v[:6] = _minus(_transpose_times(r_wb, v_i), u_i) + w_b
         v[6:] = qd_j
-        return Estimate(q, v, contacts, anchors, np.array(v_wb), *self._predictions(t, r_wi, v_i, p_wb, v_wb))
+        return Estimate(q, v, contacts, anchored, anchors, np.array(v_wb), *self._predictions(t, r_wi, v_i, p_wb, v_wb))
 
     def _position(self, t: int, r_wf: tuple[list[float], list[float]], forces: tuple[float, float],
-                  contacts: list[bool], anchored: tuple[bool, bool]) -> tuple[list[float], list[np.ndarray | None]]:
+                  contacts: list[bool], anchored: list[bool]) -> tuple[list[float], list[np.ndarray | None]]:
         """(4): ``p_WB`` (floats) from ``R_WB r_BF_k`` (``r_wf``), and every foot's anchor (the state
         while it stays, a new one at touch-down, None when off)."""
         stay_left, stay_right = contacts[0] and anchored[0], contacts[1] and anchored[1]
@@ -310,15 +312,16 @@ class FloatingBaseEstimator(dg.Entity):
         """
         est = self.estimate(t)
         pending = [self.velocity_prediction, self.position_prediction]
-        self.velocity_prediction.stage(est.next_velocity)
-        self.position_prediction.stage(est.next_position)
-        for k in range(2):
-            if est.contacts[k] != self._anchored[k](t):
-                self._anchored[k].stage(est.contacts[k])
-                pending.append(self._anchored[k])
-                if est.contacts[k]:
-                    self._anchor[k].stage(est.anchors[k])
-                    pending.append(self._anchor[k])
+        self.velocity_prediction.stage(est.next_velocity, copy=False)  # arrays of the estimate's own
+        self.position_prediction.stage(est.next_position, copy=False)
+        if est.contacts != est.anchored:
+            for k in (0, 1):
+                if est.contacts[k] != est.anchored[k]:
+                    self._anchored[k].stage(est.contacts[k])
+                    pending.append(self._anchored[k])
+                    if est.contacts[k]:
+                        self._anchor[k].stage(est.anchors[k], copy=False)
+                        pending.append(self._anchor[k])
         if not self.velocity_initialised(t):  # after the first tick the prediction is meaningful,
             self.velocity_initialised.stage(True)  # in flight too (the robot starts at v0)
             pending.append(self.velocity_initialised)
