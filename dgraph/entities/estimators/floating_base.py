@@ -42,15 +42,16 @@ class FloatingBaseEstimator(dg.Entity):
     detection), never the true base. Notation (``leg_odometry``): ``W`` world, ``B`` base,
     ``I`` IMU, ``F`` foot (sole) frame, ``S`` ankle F/T sensor frame; ``R_XY``, ``r_XY``
     rotation and position of ``Y`` in ``X``; ``r_BX``, ``R_BX`` and the velocities relative to
-    the base ``rd_BX = J_X^lin(q_j) qd_j``, ``w_BX = J_X^ang(q_j) qd_j`` (in ``B``) come from one
-    forward kinematics of the encoders ``(q_j, qd_j)`` with the base at the identity.
+    the base ``rd_BX = J_X^lin(q_j) qd_j = R_BX v_X``, ``w_BX = J_X^ang(q_j) qd_j = R_BX w_X`` (in
+    ``B``; ``v_X``, ``w_X`` the frame's velocity in ``X``, (K)) come from one forward kinematics of
+    the encoders ``(q_j, qd_j)`` with the base at the identity.
 
     At tick ``t``, from the inputs at ``t`` and the states at ``t`` (nothing else):
 
     1. Orientation: ``R_WB = R_WI R_BI^T`` (``R_WI`` from the IMU quaternion; the IMU is on the
        torso, so ``R_BI`` depends on the torso joints).
     2. Angular velocity (gyro ``w_g`` in ``I``): ``w_g = R_BI^T (w_B + w_BI)``, so
-       ``w_B = R_BI w_g - w_BI`` (base frame, Pinocchio's ``v[3:6]``).
+       ``w_B = R_BI w_g - w_BI = R_BI (w_g - w_I)`` (base frame, Pinocchio's ``v[3:6]``).
     3. Contacts: normal force ``f_k = e_z . (R_WB R_BS_k f_S_k)`` (sensor force along the world
        vertical); ``c_k = f_k > f_on or (a_k and f_k > f_off)`` (hysteresis), ``a_k`` the state
        "foot k was in contact at t-1 and has an anchor ``p_k``".
@@ -60,7 +61,7 @@ class FloatingBaseEstimator(dg.Entity):
        (``c_k and not a_k``) is anchored at ``p_k = p_WB + R_WB r_BF_k``, consistent with
        ``p_WB``; a foot off the ground is ignored.
     5. Kinematic velocity (feet in contact do not move): the velocity of a point ``X`` fixed on
-       the robot is ``v_WB + R_WB u_X`` with ``u_X = w_B x r_BX + rd_BX`` (in ``B``); a foot in
+       the robot is ``v_WB + R_WB u_X`` with ``u_X = w_B x r_BX + R_BX v_X`` (in ``B``); a foot in
        contact gives ``0 = v_WB + R_WB u_F_k`` and the IMU point moves at
        ``v_I = v_WB + R_WB u_I``, so ``v_I,kin = R_WB (u_I - sum w_k u_F_k)`` (weights of (4)
        over the feet in contact).
@@ -84,12 +85,13 @@ class FloatingBaseEstimator(dg.Entity):
 
     The 3-vector algebra is done in Python floats (a numpy call costs more than the dozen
     multiplications of a rotation); the frames come from one pass of
-    :class:`~dgraph.entities.estimators.leg_odometry.RelativeKinematics`.
+    :class:`~dgraph.entities.estimators.leg_odometry.RelativeKinematics`, and ``q``, ``v``, the
+    next filter states and ``v_WB`` are written into one array (the outputs are slices of it).
 
     Tick transition (``prepare_state`` at ``t`` stages, ``commit_state`` publishes at ``t + 1``;
     flags and anchors only when they change):
     ``a_k(t + 1) = c_k(t)``, ``p_k(t + 1) = p_k`` (the anchor used at ``t``; kept when off),
-    ``x(t + 1)`` as above, ``i(t + 1) = i(t) or any c_k(t)``, ``p~(t + 1) = p_WB(t) + dt v_WB(t)``
+    ``x(t + 1)`` as above, ``i(t + 1)`` true, ``p~(t + 1) = p_WB(t) + dt v_WB(t)``
     (dead reckoning when no foot is on the ground). Initial state: no anchor, ``i`` false,
     ``x = 0`` (used only if no foot touches at tick 0: the robot then starts at rest),
     ``p~ = q0[:3]``; the feet in contact at tick 0 are anchored from ``q0[:3]`` and the IMU
@@ -162,8 +164,7 @@ class FloatingBaseEstimator(dg.Entity):
         if self.q0 is not None and self.q0.shape != (self.nq,):
             raise dg.ParamError(f"{entity}: q0 has shape {self.q0.shape}, expected ({self.nq},)", entity=self.name)
         names = [*self.foot_frames, self.imu_frame_name, *self.ft_frames]
-        self._kinematics = RelativeKinematics(model, names)
-        self._names = names  # left, right, IMU, sensors left, right
+        self._kinematics = RelativeKinematics(model, names)  # left, right, IMU, sensors left, right
         self._gravity = np.array(model.gravity.linear, dtype=float).tolist()
         self._alpha_dt, self._alpha = None, 0.0
 
@@ -192,39 +193,32 @@ class FloatingBaseEstimator(dg.Entity):
     def estimate(self, t: int) -> Any:
         """Everything estimated at ``t`` (an ``Estimate``: q, v, contacts, anchors, next states)."""
         q_j, qd_j = self.encoder_position(t), self.encoder_velocity(t)
-        kin = self._kinematics
-        kin.forward(q_j, qd_j)  # frames relative to the base, in B (see RelativeKinematics)
-        left, right, imu, ft_left, ft_right = self._names
-        r_bi = kin.rotation[imu].tolist()
+        frames, motions = self._kinematics.forward(q_j, qd_j)  # R_BX, r_BX; v_X, w_X (K), for left, right, I, S_k
         r_wi = quat_to_rows(self.imu_orientation(t).tolist())
-        r_wb = _times_transpose(r_wi, r_bi)                                      # (1)
-        w_b = _minus(_times(r_bi, self.imu_angular_velocity(t).tolist()), kin.angular_velocity(imu))  # (2)
-        forces = (_dot(r_wb[2], _times(kin.rotation[ft_left].tolist(), self.ft_left_ankle(t)[:3].tolist())),
-                  _dot(r_wb[2], _times(kin.rotation[ft_right].tolist(), self.ft_right_ankle(t)[:3].tolist())))  # (3)
+        r_wb, w_b = _orientation(r_wi, frames[2], motions[2], self.imu_angular_velocity(t).tolist())  # (1), (2)
+        forces = [_normal_force(r_wb, frames[3], self.ft_left_ankle(t)),
+                  _normal_force(r_wb, frames[4], self.ft_right_ankle(t))]                              # (3)
         anchored = [self.anchored_left(t), self.anchored_right(t)]
         on, off = self.contact_force_on, self.contact_force_off
         contacts = [contact_hysteresis(forces[0], anchored[0], on, off),
                     contact_hysteresis(forces[1], anchored[1], on, off)]
-        r_bf = (kin.translation[left].tolist(), kin.translation[right].tolist())
-        p_wb, anchors = self._position(t, (_times(r_wb, r_bf[0]), _times(r_wb, r_bf[1])), forces, contacts,
-                                       anchored)                                 # (4)
-        u_i = _cross_add(w_b, kin.translation[imu].tolist(), kin.velocity(imu))  # (5)
+        r_wf = [_rotate(r_wb, frames[0][9:]), _rotate(r_wb, frames[1][9:])]
+        p_wb, anchors = self._position(t, r_wf, forces, contacts, anchored)                            # (4)
+        u_i = _point_velocity(w_b, frames[2], motions[2])                                             # (5)
+        dt = self.dt
         if contacts[0] or contacts[1]:
-            u_f = (_cross_add(w_b, r_bf[0], kin.velocity(left)), _cross_add(w_b, r_bf[1], kin.velocity(right)))
-            v_i = self._fused_velocity(t, r_wb, u_i, u_f, forces, contacts)     # (5), (6)
+            v_i = self._fused_velocity(t, dt, r_wb, u_i, (_point_velocity(w_b, frames[0], motions[0]),
+                                                          _point_velocity(w_b, frames[1], motions[1])),
+                                       forces, contacts)                                               # (5), (6)
         else:
             v_i = self.velocity_prediction(t).tolist()
-        v_wb = _minus(v_i, _times(r_wb, u_i))                                    # (6)
-        q = np.empty(self.nq)                                                    # (7)
-        q[:7] = p_wb + matrix_to_quat(r_wb)
-        q[7:] = q_j
-        v = np.empty(self.nv)
-        v[:6] = _minus(_transpose_times(r_wb, v_i), u_i) + w_b
-        v[6:] = qd_j
-        return Estimate(q, v, contacts, anchored, anchors, np.array(v_wb), *self._predictions(t, r_wi, v_i, p_wb, v_wb))
+        values = self._values(t, dt, q_j, qd_j, r_wi, r_wb, w_b, u_i, p_wb, v_i)                        # (6), (7)
+        nq, end = self.nq, self.nq + self.nv
+        return Estimate(values[:nq], values[nq:end], contacts, anchored, anchors, values[end + 6:],
+                        values[end:end + 3], values[end + 3:end + 6])
 
-    def _position(self, t: int, r_wf: tuple[list[float], list[float]], forces: tuple[float, float],
-                  contacts: list[bool], anchored: list[bool]) -> tuple[list[float], list[np.ndarray | None]]:
+    def _position(self, t: int, r_wf: list[list[float]], forces: list[float], contacts: list[bool],
+                  anchored: list[bool]) -> tuple[list[float], list[np.ndarray | None]]:
         """(4): ``p_WB`` (floats) from ``R_WB r_BF_k`` (``r_wf``), and every foot's anchor (the state
         while it stays, a new one at touch-down, None when off)."""
         stay_left, stay_right = contacts[0] and anchored[0], contacts[1] and anchored[1]
@@ -238,7 +232,8 @@ class FloatingBaseEstimator(dg.Entity):
                     w_left * (a2 - l2) + w_right * (b2 - r2)]
         elif stay_left or stay_right:
             k = 0 if stay_left else 1
-            p_wb = _minus(anchors[k].tolist(), r_wf[k])
+            (a0, a1, a2), (l0, l1, l2) = anchors[k].tolist(), r_wf[k]
+            p_wb = [a0 - l0, a1 - l1, a2 - l2]
         else:
             p_wb = self.position_prediction(t).tolist()
         for k in (0, 1):
@@ -246,33 +241,46 @@ class FloatingBaseEstimator(dg.Entity):
                 anchors[k] = np.array([p + r for p, r in zip(p_wb, r_wf[k], strict=True)])
         return p_wb, anchors
 
-    def _fused_velocity(self, t: int, r_wb: list[list[float]], u_i: list[float],
-                        u_f: tuple[list[float], list[float]], forces: tuple[float, float],
-                        contacts: list[bool]) -> list[float]:
+    def _fused_velocity(self, t: int, dt: float, r_wb: tuple[float, ...], u_i: list[float],
+                        u_f: tuple[list[float], list[float]], forces: list[float], contacts: list[bool]) -> list[float]:
         """(5) and (6): the IMU velocity ``v_I`` (floats), with at least one foot in contact."""
         f_left = forces[0] if contacts[0] else 0.0
         f_right = forces[1] if contacts[1] else 0.0
         w_left, w_right = f_left / (f_left + f_right), f_right / (f_left + f_right)
         (l0, l1, l2), (r0, r1, r2) = u_f
-        kinematic = _times(r_wb, [u_i[0] - (w_left * l0 + w_right * r0), u_i[1] - (w_left * l1 + w_right * r1),
-                                  u_i[2] - (w_left * l2 + w_right * r2)])
+        k0, k1, k2 = _rotate(r_wb, [u_i[0] - (w_left * l0 + w_right * r0), u_i[1] - (w_left * l1 + w_right * r1),
+                                    u_i[2] - (w_left * l2 + w_right * r2)])
         if not self.velocity_initialised(t):
-            return kinematic
-        alpha = self._filter_weight()
-        (x0, x1, x2), (k0, k1, k2) = self.velocity_prediction(t).tolist(), kinematic
+            return [k0, k1, k2]
+        alpha = self._filter_weight(dt)
+        x0, x1, x2 = self.velocity_prediction(t).tolist()
         return [alpha * x0 + (1.0 - alpha) * k0, alpha * x1 + (1.0 - alpha) * k1, alpha * x2 + (1.0 - alpha) * k2]
 
-    def _predictions(self, t: int, r_wi: list[list[float]], v_i: list[float], p_wb: list[float],
-                     v_wb: list[float]) -> tuple[np.ndarray, np.ndarray]:
-        """The next filter states: ``x(t + 1) = v_I + dt a_W`` (6), ``p~(t + 1) = p_WB + dt v_WB``."""
-        dt, (g0, g1, g2) = self.dt, self._gravity
-        a0, a1, a2 = _times(r_wi, self.imu_linear_acceleration(t).tolist())
-        return (np.array([v_i[0] + dt * (a0 + g0), v_i[1] + dt * (a1 + g1), v_i[2] + dt * (a2 + g2)]),
-                np.array([p_wb[0] + dt * v_wb[0], p_wb[1] + dt * v_wb[1], p_wb[2] + dt * v_wb[2]]))
+    def _values(self, t: int, dt: float, q_j: np.ndarray, qd_j: np.ndarray, r_wi: list[list[float]],
+                r_wb: tuple[float, ...], w_b: list[float], u_i: list[float], p_wb: list[float],
+                v_i: list[float]) -> np.ndarray:
+        """One array ``[q, v, x(t + 1), p~(t + 1), v_WB]``: (7), the next states of (6) and the tick
+        transition, with ``v_WB = v_I - R_WB u_I``, ``R_WB^T v_WB = R_WB^T v_I - u_I``."""
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = r_wb
+        (e00, e01, e02), (e10, e11, e12), (e20, e21, e22) = r_wi
+        (u0, u1, u2), (v0, v1, v2), (p0, p1, p2), (g0, g1, g2) = u_i, v_i, p_wb, self._gravity
+        a0, a1, a2 = self.imu_linear_acceleration(t).tolist()
+        b0, b1, b2 = v0 - (r00 * u0 + r01 * u1 + r02 * u2), v1 - (r10 * u0 + r11 * u1 + r12 * u2), \
+            v2 - (r20 * u0 + r21 * u1 + r22 * u2)
+        nq = self.nq
+        values = np.empty(nq + self.nv + 9)
+        values[:7] = [p0, p1, p2, *matrix_to_quat(((r00, r01, r02), (r10, r11, r12), (r20, r21, r22)))]
+        values[7:nq] = q_j
+        values[nq:nq + 6] = [r00 * v0 + r10 * v1 + r20 * v2 - u0, r01 * v0 + r11 * v1 + r21 * v2 - u1,
+                             r02 * v0 + r12 * v1 + r22 * v2 - u2, *w_b]
+        values[nq + 6:-9] = qd_j
+        values[-9:] = [v0 + dt * (e00 * a0 + e01 * a1 + e02 * a2 + g0), v1 + dt * (e10 * a0 + e11 * a1 + e12 * a2 + g1),
+                       v2 + dt * (e20 * a0 + e21 * a1 + e22 * a2 + g2), p0 + dt * b0, p1 + dt * b1, p2 + dt * b2,
+                       b0, b1, b2]
+        return values
 
-    def _filter_weight(self) -> float:
-        """``alpha`` of (6) for the current ``dt`` (computed again only if ``dt`` changes)."""
-        dt = self.dt
+    def _filter_weight(self, dt: float) -> float:
+        """``alpha`` of (6) for ``dt`` (computed again only if ``dt`` changes)."""
         if dt != self._alpha_dt:
             self._alpha_dt, self._alpha = dt, complementary_alpha(self.cutoff_frequency, dt)
         return self._alpha
@@ -334,39 +342,46 @@ class FloatingBaseEstimator(dg.Entity):
         self._pending = []
 
 
-def _times(r: list[list[float]], x: list[float]) -> list[float]:
-    """``R x`` for a 3x3 matrix given by its rows and a 3-vector (Python floats, as every helper
-    below: cheaper than numpy's cost per call on 3-vectors)."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r
+def _orientation(r_wi: list[list[float]], imu: list[float], motion: list[float],
+                 gyro: list[float]) -> tuple[tuple[float, ...], list[float]]:
+    """(1) ``R_WB = R_WI R_BI^T`` (rows, flattened) and (2) ``w_B = R_BI w_g - w_BI = R_BI (w_g - w_I)``
+    (``w_BI = R_BI w_I``, (K)), from ``R_WI`` (rows), the IMU frame's ``[R_BI by columns, r_BI]`` and
+    ``[v_I, w_I]``, and the gyro ``w_g``. Python floats, as every helper below (a numpy call costs
+    more than the dozen multiplications of a rotation)."""
+    (e00, e01, e02), (e10, e11, e12), (e20, e21, e22) = r_wi
+    b00, b10, b20, b01, b11, b21, b02, b12, b22, _, _, _ = imu
+    _, _, _, m0, m1, m2 = motion
+    g0, g1, g2 = gyro[0] - m0, gyro[1] - m1, gyro[2] - m2
+    return ((e00 * b00 + e01 * b01 + e02 * b02, e00 * b10 + e01 * b11 + e02 * b12, e00 * b20 + e01 * b21 + e02 * b22,
+             e10 * b00 + e11 * b01 + e12 * b02, e10 * b10 + e11 * b11 + e12 * b12, e10 * b20 + e11 * b21 + e12 * b22,
+             e20 * b00 + e21 * b01 + e22 * b02, e20 * b10 + e21 * b11 + e22 * b12, e20 * b20 + e21 * b21 + e22 * b22),
+            [b00 * g0 + b01 * g1 + b02 * g2, b10 * g0 + b11 * g1 + b12 * g2, b20 * g0 + b21 * g1 + b22 * g2])
+
+
+def _normal_force(r_wb: tuple[float, ...], sensor: list[float], wrench: np.ndarray) -> float:
+    """(3) ``f_k = e_z . (R_WB R_BS f_S)`` from the sensor frame's ``[R_BS by columns, r_BS]`` and its wrench."""
+    _, _, _, _, _, _, z0, z1, z2 = r_wb
+    s00, s10, s20, s01, s11, s21, s02, s12, s22, _, _, _ = sensor
+    f0, f1, f2, _, _, _ = wrench.tolist()
+    return ((z0 * s00 + z1 * s10 + z2 * s20) * f0 + (z0 * s01 + z1 * s11 + z2 * s21) * f1
+            + (z0 * s02 + z1 * s12 + z2 * s22) * f2)
+
+
+def _point_velocity(w_b: list[float], frame: list[float], motion: list[float]) -> list[float]:
+    """(5) ``u_X = w_B x r_BX + rd_BX``, ``rd_BX = R_BX v_X`` (K), from the frame's ``[R_BX by columns,
+    r_BX]`` and ``[v_X, w_X]``."""
+    w0, w1, w2 = w_b
+    x00, x10, x20, x01, x11, x21, x02, x12, x22, p0, p1, p2 = frame
+    v0, v1, v2, _, _, _ = motion
+    return [w1 * p2 - w2 * p1 + x00 * v0 + x01 * v1 + x02 * v2, w2 * p0 - w0 * p2 + x10 * v0 + x11 * v1 + x12 * v2,
+            w0 * p1 - w1 * p0 + x20 * v0 + x21 * v1 + x22 * v2]
+
+
+def _rotate(r: tuple[float, ...], x: list[float]) -> list[float]:
+    """``R x`` for a rotation given by its rows, flattened, and a 3-vector."""
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = r
     x0, x1, x2 = x
     return [r00 * x0 + r01 * x1 + r02 * x2, r10 * x0 + r11 * x1 + r12 * x2, r20 * x0 + r21 * x1 + r22 * x2]
-
-
-def _transpose_times(r: list[list[float]], x: list[float]) -> list[float]:
-    """``R^T x`` for a 3x3 matrix given by its rows and a 3-vector."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r
-    x0, x1, x2 = x
-    return [r00 * x0 + r10 * x1 + r20 * x2, r01 * x0 + r11 * x1 + r21 * x2, r02 * x0 + r12 * x1 + r22 * x2]
-
-
-def _times_transpose(a: list[list[float]], b: list[list[float]]) -> list[list[float]]:
-    """``A B^T`` for 3x3 matrices given by their rows (row ``i`` is ``B a_i``)."""
-    return [_times(b, row) for row in a]
-
-
-def _cross_add(w: list[float], r: list[float], d: list[float]) -> list[float]:
-    """``w x r + d`` for 3-vectors."""
-    return [w[1] * r[2] - w[2] * r[1] + d[0], w[2] * r[0] - w[0] * r[2] + d[1], w[0] * r[1] - w[1] * r[0] + d[2]]
-
-
-def _minus(a: list[float], b: list[float]) -> list[float]:
-    """``a - b`` for 3-vectors."""
-    return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-
-
-def _dot(a: list[float], b: list[float]) -> float:
-    """``a . b`` for 3-vectors."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 __all__ = ["Estimate", "FloatingBaseEstimator"]

@@ -8,9 +8,9 @@ frame ``Y`` in frame ``X`` and ``r_XY`` the position of the origin of ``Y`` in `
 :class:`RelativeKinematics` evaluates the robot *relative to its base*: with the free-flyer
 at the identity and at rest, one first-order ``forwardKinematics`` from the joint encoders
 ``(q_j, qd_j)`` gives, for every frame ``X`` of interest, ``R_BX``, ``r_BX`` and its velocity
-relative to the base expressed in ``B``: ``d/dt r_BX = J_X^lin(q_j) qd_j`` and
-``w_BX = J_X^ang(q_j) qd_j`` (no Jacobian is formed). The quaternion helpers work on Python
-floats, which the estimators use for their 3-vector algebra.
+in ``X``, ``(v_X, w_X)``, hence relative to the base in ``B``: ``d/dt r_BX = J_X^lin(q_j) qd_j
+= R_BX v_X`` and ``w_BX = J_X^ang(q_j) qd_j = R_BX w_X`` (no Jacobian is formed). The
+quaternion helpers work on Python floats, which the estimators use for their 3-vector algebra.
 """
 
 from __future__ import annotations
@@ -122,23 +122,29 @@ def complementary_alpha(cutoff: float, dt: float) -> float:
 
 
 class RelativeKinematics:
-    """Frames of a free-flyer model relative to its base, from the joint encoders.
+    """A few frames of a free-flyer model relative to its base, from the joint encoders.
 
     Built for the frames named in ``frames``: every joint that moves none of them (outside the
     supports of their parent joints: on TALOS the arms, grippers and head when the frames are
     on the legs and the torso) is locked (``pinocchio.buildReducedModel``), which changes
-    nothing for these frames and halves the work. :meth:`forward` runs one first-order
-    ``pinocchio.forwardKinematics(model, data, q, v)`` on that model with
-    ``q = [0, 0, 0, 0, 0, 0, 1, q_j]`` and ``v = [0_6, qd_j]`` (base at the identity and at
-    rest, ``q_j``, ``qd_j`` restricted to the joints kept) and ``updateFramePlacement`` of the
-    frames. Then, for a frame ``X`` on joint ``j`` at the fixed placement ``r_jX`` (in ``j``):
-    :attr:`rotation` and :attr:`translation` hold ``R_BX`` and ``r_BX``, and
-    :meth:`velocity` gives ``d/dt r_BX = R_Bj (v_j + w_j x r_jX)`` and ``w_BX = R_Bj w_j``
-    (``v_j``, ``w_j`` the joint's velocity in its own frame, ``data.v[j]``), both in ``B``.
+    nothing for these frames and halves the work; then every frame ``X`` gets a joint of its
+    own, appended after the others: a revolute joint held at zero (its motion is the identity,
+    so its placement is the frame's, bit for bit) on the frame's parent joint at the frame's
+    placement. :meth:`forward` runs one first-order ``pinocchio.forwardKinematics(model, data,
+    q, v)`` on that model with ``q = [0, 0, 0, 0, 0, 0, 1, q_j, 0]`` and ``v = [0_6, qd_j, 0]``
+    (base at the identity and at rest, ``q_j``, ``qd_j`` restricted to the joints kept), which
+    computes every frame's placement ``(R_BX, r_BX)`` and velocity ``(v_X, w_X)`` (Pinocchio's
+    LOCAL: expressed in ``X``) with the joints', in C++. In ``B``::
 
-    :attr:`rotation`, :attr:`translation` and the joint quantities are numpy arrays that share
-    Pinocchio's memory in ``data`` (read once here, updated in place by every pass: no
-    conversion per read), so they are valid as long as this object lives.
+        d/dt r_BX = J_X^lin(q_j) qd_j = R_BX v_X,   w_BX = J_X^ang(q_j) qd_j = R_BX w_X.    (K)
+
+    It returns them in Python floats, one row per frame in the order of ``frames``, as they lie
+    in Pinocchio's memory: ``R_BX`` column by column and ``r_BX`` (12 floats), and ``v_X``,
+    ``w_X`` (6 floats). The frames' joints being consecutive, their placements and velocities
+    are consecutive elements of ``data.oMi`` and ``data.v`` (std::vectors): one read-only
+    (frames, 12) and one (frames, 6) array view them (their layout is checked here), and one
+    ``tolist`` each converts them; the views are valid as long as this object (which holds
+    ``data``) lives.
     """
 
     def __init__(self, model: Any, frames: Sequence[str]):
@@ -146,54 +152,62 @@ class RelativeKinematics:
 
         kept = {j for name in frames for j in model.supports[model.frames[model.getFrameId(name)].parentJoint]}
         locked = [j for j in range(2, model.njoints) if j not in kept]
-        self.model = reduced = pin.buildReducedModel(model, locked, pin.neutral(model)) if locked else model
+        self.model = reduced = pin.buildReducedModel(model, locked, pin.neutral(model)) if locked else pin.Model(model)
+        first = reduced.njoints
+        for name in frames:
+            frame = reduced.frames[reduced.getFrameId(name)]
+            reduced.addJoint(frame.parentJoint, pin.JointModelRX(), frame.placement, f"{name} (frame)")
         self.data = data = reduced.createData()
-        ids = [reduced.getFrameId(name) for name in frames]
-        self._ids = ids
-        self.rotation = {name: data.oMf[i].rotation for name, i in zip(frames, ids, strict=True)}
-        self.translation = {name: data.oMf[i].translation for name, i in zip(frames, ids, strict=True)}
-        self._motion = {}
-        for name, i in zip(frames, ids, strict=True):
-            j = reduced.frames[i].parentJoint
-            self._motion[name] = (data.oMi[j].rotation, data.v[j].linear, data.v[j].angular,
-                                  reduced.frames[i].placement.translation.tolist())
-        joints = sorted(kept - {0, 1})
-        self._q_joints = _selection([i for j in joints for i in range(model.idx_qs[j] - 7,
-                                                                        model.idx_qs[j] - 7 + model.nqs[j])])
-        self._v_joints = _selection([i for j in joints for i in range(model.idx_vs[j] - 6,
-                                                                        model.idx_vs[j] - 6 + model.nvs[j])])
-        self._q = pin.neutral(reduced)
+        joints = range(first, reduced.njoints)
+        self._placements = _rows([(data.oMi[j].rotation, data.oMi[j].translation) for j in joints])
+        self._motions = _rows([(data.v[j].linear, data.v[j].angular) for j in joints])
+        kept_joints = sorted(kept - {0, 1})
+        self._q_joints = _selection([i for j in kept_joints for i in range(model.idx_qs[j] - 7,
+                                                                             model.idx_qs[j] - 7 + model.nqs[j])])
+        self._v_joints = _selection([i for j in kept_joints for i in range(model.idx_vs[j] - 6,
+                                                                             model.idx_vs[j] - 6 + model.nvs[j])])
+        self._q = pin.neutral(reduced)  # the frames' joints stay at 0
         self._q[:7] = [0, 0, 0, 0, 0, 0, 1]
         self._v = np.zeros(reduced.nv)
+        self._q_slice, self._v_slice = slice(7, reduced.idx_qs[first]), slice(6, reduced.idx_vs[first])
         self._pin = pin
 
-    def forward(self, q_joints: np.ndarray, v_joints: np.ndarray) -> None:
+    def forward(self, q_joints: np.ndarray, v_joints: np.ndarray) -> tuple[list[list[float]], list[list[float]]]:
         """The pass for joint positions ``q_joints`` (``q[7:]`` of the full model) and velocities
-        ``v_joints`` (``v[6:]``): forward kinematics, then the placements of the frames."""
-        pin, model, data = self._pin, self.model, self.data
-        self._q[7:] = q_joints[self._q_joints]
-        self._v[6:] = v_joints[self._v_joints]
-        pin.forwardKinematics(model, data, self._q, self._v)
-        for i in self._ids:
-            pin.updateFramePlacement(model, data, i)
-
-    def velocity(self, name: str) -> list[float]:
-        """``d/dt r_BX = R_Bj (v_j + w_j x r_jX)`` of frame ``name`` (Python floats, in ``B``) after :meth:`forward`."""
-        rotation, linear, angular, (p0, p1, p2) = self._motion[name]
-        v0, v1, v2 = linear.tolist()
-        w0, w1, w2 = angular.tolist()
-        return _rotate(rotation, v0 + w1 * p2 - w2 * p1, v1 + w2 * p0 - w0 * p2, v2 + w0 * p1 - w1 * p0)
-
-    def angular_velocity(self, name: str) -> list[float]:
-        """``w_BX = R_Bj w_j`` of frame ``name`` (Python floats, in ``B``) after :meth:`forward`."""
-        rotation, _, angular, _ = self._motion[name]
-        return _rotate(rotation, *angular.tolist())
+        ``v_joints`` (``v[6:]``): per frame, ``[R_BX by columns, r_BX]`` and ``[v_X, w_X]``."""
+        self._q[self._q_slice] = q_joints[self._q_joints]
+        self._v[self._v_slice] = v_joints[self._v_joints]
+        self._pin.forwardKinematics(self.model, self.data, self._q, self._v)
+        return self._placements.tolist(), self._motions.tolist()
 
 
-def _rotate(rotation: np.ndarray, x: float, y: float, z: float) -> list[float]:
-    """``R (x, y, z)`` in Python floats."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation.tolist()
-    return [r00 * x + r01 * y + r02 * z, r10 * x + r11 * y + r12 * z, r20 * x + r21 * y + r22 * z]
+def _rows(elements: list[tuple[np.ndarray, ...]]) -> np.ndarray:
+    """A read-only view of consecutive elements of a Pinocchio std::vector, one row per element.
+
+    ``elements[i]`` are the float64 arrays eigenpy gives for the members of element ``i`` (the
+    rotation and translation of an SE3, the linear and angular parts of a Motion): they share
+    the vector's memory. The row of an element is its memory, its members one after the other,
+    a matrix column by column (Eigen's order); a RuntimeError if the members do not tile the
+    elements that way, at one element's size apart.
+    """
+    sizes = [member.size for member in elements[0]]
+    width = sum(sizes)
+    origin = elements[0][0].__array_interface__["data"][0]
+    for i, members in enumerate(elements):
+        found = [address - origin for member in members for address in _addresses(member)]
+        if found != [8 * (i * width + k) for k in range(width)]:
+            raise RuntimeError(f"unexpected memory layout of a Pinocchio vector (element {i}: offsets {found})")
+    return np.lib.stride_tricks.as_strided(elements[0][0], shape=(len(elements), width), strides=(8 * width, 8),
+                                           writeable=False)
+
+
+def _addresses(array: np.ndarray) -> list[int]:
+    """The addresses of the entries of a float64 array, column by column (Eigen's order)."""
+    if array.dtype != np.float64:
+        raise RuntimeError(f"expected float64 Pinocchio memory, got {array.dtype}")
+    start = array.__array_interface__["data"][0]
+    order = sorted(np.ndindex(array.shape), key=lambda index: index[::-1])
+    return [start + sum(i * s for i, s in zip(index, array.strides, strict=True)) for index in order]
 
 
 def _selection(indices: list[int]) -> slice | np.ndarray:

@@ -238,24 +238,35 @@ def test_relative_kinematics_is_the_full_models_pass_with_the_base_at_rest(frame
     data = model.createData()
     kin = RelativeKinematics(model, frames)
     kept = {j for f in frames for j in model.supports[model.frames[model.getFrameId(f)].parentJoint]}
-    assert kin.model.njoints == len(kept) < model.njoints  # the joints moving none of the frames are locked
+    assert kin.model.njoints == len(kept) + len(frames) < model.njoints  # joints moving none of the frames locked
     for _ in range(20):
         q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
         q[:7] = [0, 0, 0, 0, 0, 0, 1]
         v = rng.normal(size=model.nv)
         v[:6] = 0.0
-        kin.forward(q[7:], v[6:])
+        placements, motions = kin.forward(q[7:], v[6:])
         pin.forwardKinematics(model, data, q, v)
-        for name in frames:
+        for name, placement, motion in zip(frames, placements, motions, strict=True):
             frame = model.getFrameId(name)
-            placement = pin.updateFramePlacement(model, data, frame)
-            motion = pin.getFrameVelocity(model, data, frame, pin.LOCAL_WORLD_ALIGNED)
-            # the arrays share Pinocchio's memory: every pass updates them in place
-            np.testing.assert_allclose(kin.rotation[name], placement.rotation, rtol=0, atol=1e-14)
-            np.testing.assert_allclose(kin.translation[name], placement.translation, rtol=0, atol=1e-14)
-            np.testing.assert_allclose(kin.velocity(name), motion.linear, rtol=0, atol=1e-12)
-            np.testing.assert_allclose(kin.angular_velocity(name), motion.angular, rtol=0, atol=1e-12)
-    assert np.abs(v[6:]).max() > 1.0 and np.abs(motion.linear).max() > 0.1  # not trivially at rest
+            expected = pin.updateFramePlacement(model, data, frame)
+            local = pin.getFrameVelocity(model, data, frame, pin.LOCAL)
+            rotation = np.array(placement[:9]).reshape(3, 3).T  # stored column by column
+            np.testing.assert_allclose(rotation, expected.rotation, rtol=0, atol=1e-14)
+            np.testing.assert_allclose(placement[9:], expected.translation, rtol=0, atol=1e-14)
+            np.testing.assert_allclose(motion, local.vector, rtol=0, atol=1e-12)
+            # (K): the velocities relative to the base, in B
+            aligned = pin.getFrameVelocity(model, data, frame, pin.LOCAL_WORLD_ALIGNED)
+            np.testing.assert_allclose(rotation @ motion[:3], aligned.linear, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(rotation @ motion[3:], aligned.angular, rtol=0, atol=1e-12)
+    assert np.abs(v[6:]).max() > 1.0 and np.abs(aligned.linear).max() > 0.1  # not trivially at rest
+
+
+def test_relative_kinematics_leaves_the_given_model_alone():
+    model = FloatingBaseEstimator("probe").pin_model
+    frames = [model.names[j] for j in range(2, model.njoints)]  # every joint's frame: nothing is locked
+    njoints = model.njoints
+    kin = RelativeKinematics(model, frames)
+    assert model.njoints == njoints and kin.model.njoints == 2 * njoints - 2
 
 
 def test_graph_file_builds_and_saves_the_estimator(tmp_path, sway):
