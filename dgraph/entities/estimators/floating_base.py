@@ -23,15 +23,12 @@ from dgraph.entities.robot.robot_state import load_model
 class Estimate:
     """Everything computed at one tick (the ``estimate`` output); read-only for readers."""
 
-    __slots__ = ("anchored", "anchors", "base_velocity_world", "contacts", "next_position", "next_velocity", "q",
-                 "v")
+    __slots__ = ("anchored", "anchors", "base_velocity_world", "contacts", "next_prediction", "q", "v")
 
     def __init__(self, q: np.ndarray, v: np.ndarray, contacts: list[bool], anchored: list[bool],
-                 anchors: list[np.ndarray | None], base_velocity_world: np.ndarray, next_velocity: np.ndarray,
-                 next_position: np.ndarray):
+                 anchors: list[np.ndarray | None], base_velocity_world: np.ndarray, next_prediction: np.ndarray):
         self.q, self.v, self.contacts, self.anchored, self.anchors = q, v, contacts, anchored, anchors
-        self.base_velocity_world = base_velocity_world
-        self.next_velocity, self.next_position = next_velocity, next_position
+        self.base_velocity_world, self.next_prediction = base_velocity_world, next_prediction
 
 
 @dg.register
@@ -103,8 +100,8 @@ class FloatingBaseEstimator(dg.Entity):
     ``encoder_position``, ``encoder_velocity``, ``ft_left_ankle``, ``ft_right_ankle``.
     Outputs: ``q``, ``v``, ``contact_left``, ``contact_right``, ``base_velocity_world``,
     ``estimate`` (everything, as an object). States: ``anchor_left``, ``anchor_right``,
-    ``anchored_left``, ``anchored_right``, ``velocity_prediction``, ``velocity_initialised``,
-    ``position_prediction``.
+    ``anchored_left``, ``anchored_right``, ``prediction`` (``[x, p~]``, staged together every
+    tick), ``velocity_initialised``.
     """
 
     has_state = True
@@ -136,10 +133,10 @@ class FloatingBaseEstimator(dg.Entity):
     anchor_right = dg.State(shape=(3,), doc="world position of the right foot frame while in contact")
     anchored_left = dg.State(shape=(), dtype="bool", doc="left foot was in contact at t-1 (anchor valid)")
     anchored_right = dg.State(shape=(), dtype="bool", doc="right foot was in contact at t-1 (anchor valid)")
-    velocity_prediction = dg.State(shape=(3,), doc="complementary filter: predicted IMU velocity in the world")
+    prediction = dg.State(shape=(6,), doc="[x, p~]: the complementary filter's predicted IMU velocity in the world, "
+                                          "and the dead-reckoned base position (used with no contact)")
     velocity_initialised = dg.State(shape=(), dtype="bool",
-                                    doc="velocity_prediction holds a prediction (a foot has touched)")
-    position_prediction = dg.State(shape=(3,), doc="dead-reckoned base position (used with no contact)")
+                                    doc="prediction holds a velocity prediction (after the first tick)")
 
     def configure(self) -> None:
         """Load the model, resolve the frames, size the encoder inputs."""
@@ -180,16 +177,15 @@ class FloatingBaseEstimator(dg.Entity):
         for k in range(2):
             self._anchor[k].set(np.zeros(3), 0)
             self._anchored[k].set(False, 0)
-        self.velocity_prediction.set(np.zeros(3), 0)
         self.velocity_initialised.set(False, 0)
-        self.position_prediction.set(np.array(q0[:3], dtype=float), 0)
+        self.prediction.set(np.array([0.0, 0.0, 0.0, *q0[:3]]), 0)
         self._pending = []
 
     # -- the estimate -----------------------------------------------------------------------
     @dg.output(dtype="object", depends=(
         "imu_orientation", "imu_angular_velocity", "imu_linear_acceleration", "encoder_position",
         "encoder_velocity", "ft_left_ankle", "ft_right_ankle", "anchor_left", "anchor_right",
-        "anchored_left", "anchored_right", "velocity_prediction", "velocity_initialised", "position_prediction"))
+        "anchored_left", "anchored_right", "prediction", "velocity_initialised"))
     def estimate(self, t: int) -> Any:
         """Everything estimated at ``t`` (an ``Estimate``: q, v, contacts, anchors, next states)."""
         q_j, qd_j = self.encoder_position(t), self.encoder_velocity(t)
@@ -211,11 +207,10 @@ class FloatingBaseEstimator(dg.Entity):
                                                           _point_velocity(w_b, frames[1], motions[1])),
                                        forces, contacts)                                               # (5), (6)
         else:
-            v_i = self.velocity_prediction(t).tolist()
+            v_i = self.prediction(t)[:3].tolist()
         values = self._values(t, dt, q_j, qd_j, r_wi, r_wb, w_b, u_i, p_wb, v_i)                        # (6), (7)
         nq, end = self.nq, self.nq + self.nv
-        return Estimate(values[:nq], values[nq:end], contacts, anchored, anchors, values[end + 6:],
-                        values[end:end + 3], values[end + 3:end + 6])
+        return Estimate(values[:nq], values[nq:end], contacts, anchored, anchors, values[end + 6:], values[end:end + 6])
 
     def _position(self, t: int, r_wf: list[list[float]], forces: list[float], contacts: list[bool],
                   anchored: list[bool]) -> tuple[list[float], list[np.ndarray | None]]:
@@ -235,7 +230,7 @@ class FloatingBaseEstimator(dg.Entity):
             (a0, a1, a2), (l0, l1, l2) = anchors[k].tolist(), r_wf[k]
             p_wb = [a0 - l0, a1 - l1, a2 - l2]
         else:
-            p_wb = self.position_prediction(t).tolist()
+            p_wb = self.prediction(t)[3:].tolist()
         for k in (0, 1):
             if contacts[k] and anchors[k] is None:
                 anchors[k] = np.array([p + r for p, r in zip(p_wb, r_wf[k], strict=True)])
@@ -253,7 +248,7 @@ class FloatingBaseEstimator(dg.Entity):
         if not self.velocity_initialised(t):
             return [k0, k1, k2]
         alpha = self._filter_weight(dt)
-        x0, x1, x2 = self.velocity_prediction(t).tolist()
+        x0, x1, x2, _, _, _ = self.prediction(t).tolist()
         return [alpha * x0 + (1.0 - alpha) * k0, alpha * x1 + (1.0 - alpha) * k1, alpha * x2 + (1.0 - alpha) * k2]
 
     def _values(self, t: int, dt: float, q_j: np.ndarray, qd_j: np.ndarray, r_wi: list[list[float]],
@@ -315,13 +310,12 @@ class FloatingBaseEstimator(dg.Entity):
         """Stage the filter states, and the contact flags and anchors that change, from the values at ``t``.
 
         A flag or an anchor is staged (and committed) only when its value changes (touch-down,
-        lift-off): its ``time`` is then the tick of the change, and a steady stance costs two
-        states per tick, not seven.
+        lift-off): its ``time`` is then the tick of the change, and a steady stance costs one
+        state per tick (``prediction``), not six.
         """
         est = self.estimate(t)
-        pending = [self.velocity_prediction, self.position_prediction]
-        self.velocity_prediction.stage(est.next_velocity, copy=False)  # arrays of the estimate's own
-        self.position_prediction.stage(est.next_position, copy=False)
+        pending = [self.prediction]
+        self.prediction.stage(est.next_prediction, copy=False)  # a slice of the estimate's own array
         if est.contacts != est.anchored:
             for k in (0, 1):
                 if est.contacts[k] != est.anchored[k]:

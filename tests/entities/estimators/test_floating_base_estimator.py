@@ -201,7 +201,7 @@ def test_defaults_and_registry():
     est = FloatingBaseEstimator("est")
     assert est.imu_frame_name == "imu_link"
     assert est.encoder_position.spec.shape == (32,) and est.q.spec.shape == (39,) and est.v.spec.shape == (38,)
-    sole_z = est.position_prediction(0)[2]
+    sole_z = est.prediction(0)[5]
     assert 1.0 < sole_z < 1.05  # half-sitting base height with the soles on the floor
     assert dg.get_type("FloatingBaseEstimator") is FloatingBaseEstimator
     assert complementary_alpha(float("inf"), DT) == 0.0
