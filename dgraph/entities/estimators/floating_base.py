@@ -10,7 +10,6 @@ import dgraph as dg
 from dgraph.entities.estimators.leg_odometry import (
     RelativeKinematics,
     complementary_alpha,
-    contact_hysteresis,
     default_imu_frame,
     frame_id,
     matrix_to_quat,
@@ -192,14 +191,12 @@ class FloatingBaseEstimator(dg.Entity):
         frames, motions = self._kinematics.forward(q_j, qd_j)  # R_BX, r_BX; v_X, w_X (K), for left, right, I, S_k
         r_wi = quat_to_rows(self.imu_orientation(t).tolist())
         r_wb, w_b = _orientation(r_wi, frames[2], motions[2], self.imu_angular_velocity(t).tolist())  # (1), (2)
-        forces = [_normal_force(r_wb, frames[3], self.ft_left_ankle(t)),
-                  _normal_force(r_wb, frames[4], self.ft_right_ankle(t))]                              # (3)
+        forces = _normal_forces(r_wb, frames, self.ft_left_ankle(t).tolist(), self.ft_right_ankle(t).tolist())  # (3)
         anchored = [self.anchored_left(t), self.anchored_right(t)]
         on, off = self.contact_force_on, self.contact_force_off
-        contacts = [contact_hysteresis(forces[0], anchored[0], on, off),
-                    contact_hysteresis(forces[1], anchored[1], on, off)]
-        r_wf = [_rotate(r_wb, frames[0][9:]), _rotate(r_wb, frames[1][9:])]
-        p_wb, anchors = self._position(t, r_wf, forces, contacts, anchored)                            # (4)
+        contacts = [forces[0] > on or (anchored[0] and forces[0] > off),
+                    forces[1] > on or (anchored[1] and forces[1] > off)]
+        p_wb, anchors = self._position(t, r_wb, frames, forces, contacts, anchored)                    # (4)
         u_i = _point_velocity(w_b, frames[2], motions[2])                                             # (5)
         dt = self.dt
         if contacts[0] or contacts[1]:
@@ -212,10 +209,15 @@ class FloatingBaseEstimator(dg.Entity):
         nq, end = self.nq, self.nq + self.nv
         return Estimate(values[:nq], values[nq:end], contacts, anchored, anchors, values[end + 6:], values[end:end + 6])
 
-    def _position(self, t: int, r_wf: list[list[float]], forces: list[float], contacts: list[bool],
-                  anchored: list[bool]) -> tuple[list[float], list[np.ndarray | None]]:
-        """(4): ``p_WB`` (floats) from ``R_WB r_BF_k`` (``r_wf``), and every foot's anchor (the state
-        while it stays, a new one at touch-down, None when off)."""
+    def _position(self, t: int, r_wb: tuple[float, ...], frames: list[list[float]], forces: list[float],
+                  contacts: list[bool], anchored: list[bool]) -> tuple[list[float], list[np.ndarray | None]]:
+        """(4): ``p_WB`` (floats) from ``R_WB r_BF_k`` (``r_BF_k`` in the rows of the feet's frames), and
+        every foot's anchor (the state while it stays, a new one at touch-down, None when off)."""
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = r_wb
+        x0, x1, x2 = frames[0][9:]
+        y0, y1, y2 = frames[1][9:]
+        r_wf = ([r00 * x0 + r01 * x1 + r02 * x2, r10 * x0 + r11 * x1 + r12 * x2, r20 * x0 + r21 * x1 + r22 * x2],
+                [r00 * y0 + r01 * y1 + r02 * y2, r10 * y0 + r11 * y1 + r12 * y2, r20 * y0 + r21 * y1 + r22 * y2])
         stay_left, stay_right = contacts[0] and anchored[0], contacts[1] and anchored[1]
         anchors = [self.anchor_left(t) if stay_left else None, self.anchor_right(t) if stay_right else None]
         if stay_left and stay_right:
@@ -231,9 +233,10 @@ class FloatingBaseEstimator(dg.Entity):
             p_wb = [a0 - l0, a1 - l1, a2 - l2]
         else:
             p_wb = self.prediction(t)[3:].tolist()
-        for k in (0, 1):
-            if contacts[k] and anchors[k] is None:
-                anchors[k] = np.array([p + r for p, r in zip(p_wb, r_wf[k], strict=True)])
+        if contacts != anchored:  # a touch-down (or a lift-off)
+            for k in (0, 1):
+                if contacts[k] and anchors[k] is None:
+                    anchors[k] = np.array([p + r for p, r in zip(p_wb, r_wf[k], strict=True)])
         return p_wb, anchors
 
     def _fused_velocity(self, t: int, dt: float, r_wb: tuple[float, ...], u_i: list[float],
@@ -352,13 +355,17 @@ def _orientation(r_wi: list[list[float]], imu: list[float], motion: list[float],
             [b00 * g0 + b01 * g1 + b02 * g2, b10 * g0 + b11 * g1 + b12 * g2, b20 * g0 + b21 * g1 + b22 * g2])
 
 
-def _normal_force(r_wb: tuple[float, ...], sensor: list[float], wrench: np.ndarray) -> float:
-    """(3) ``f_k = e_z . (R_WB R_BS f_S)`` from the sensor frame's ``[R_BS by columns, r_BS]`` and its wrench."""
+def _normal_forces(r_wb: tuple[float, ...], frames: list[list[float]], left: list[float],
+                   right: list[float]) -> list[float]:
+    """(3) ``f_k = e_z . (R_WB R_BS_k f_S_k)`` from the sensor frames' ``[R_BS by columns, r_BS]``
+    (``frames[3]``, ``frames[4]``) and the wrenches."""
     _, _, _, _, _, _, z0, z1, z2 = r_wb
-    s00, s10, s20, s01, s11, s21, s02, s12, s22, _, _, _ = sensor
-    f0, f1, f2, _, _, _ = wrench.tolist()
-    return ((z0 * s00 + z1 * s10 + z2 * s20) * f0 + (z0 * s01 + z1 * s11 + z2 * s21) * f1
-            + (z0 * s02 + z1 * s12 + z2 * s22) * f2)
+    s00, s10, s20, s01, s11, s21, s02, s12, s22, _, _, _ = frames[3]
+    t00, t10, t20, t01, t11, t21, t02, t12, t22, _, _, _ = frames[4]
+    return [(z0 * s00 + z1 * s10 + z2 * s20) * left[0] + (z0 * s01 + z1 * s11 + z2 * s21) * left[1]
+            + (z0 * s02 + z1 * s12 + z2 * s22) * left[2],
+            (z0 * t00 + z1 * t10 + z2 * t20) * right[0] + (z0 * t01 + z1 * t11 + z2 * t21) * right[1]
+            + (z0 * t02 + z1 * t12 + z2 * t22) * right[2]]
 
 
 def _point_velocity(w_b: list[float], frame: list[float], motion: list[float]) -> list[float]:

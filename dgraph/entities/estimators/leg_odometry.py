@@ -107,11 +107,6 @@ def matrix_to_quat(r: Any) -> list[float]:
     return [x * scale, y * scale, z * scale, w * scale]
 
 
-def contact_hysteresis(force: float, previous: bool, on: float, off: float) -> bool:
-    """Schmitt trigger: contact if ``force > on``, or if already in contact and ``force > off``."""
-    return force > on or (previous and force > off)
-
-
 def complementary_alpha(cutoff: float, dt: float) -> float:
     """Weight of the integrated accelerometer: ``alpha = tau / (tau + dt)``, ``tau = 1 / (2 pi f_c)``.
 
