@@ -190,19 +190,16 @@ class FloatingBaseEstimator(dg.Entity):
         q_j, qd_j = self.encoder_position(t), self.encoder_velocity(t)
         frames, motions = self._kinematics.forward(q_j, qd_j)  # R_BX, r_BX; v_X, w_X (K), for left, right, I, S_k
         r_wi = quat_to_rows(self.imu_orientation(t).tolist())
-        r_wb, w_b = _orientation(r_wi, frames[2], motions[2], self.imu_angular_velocity(t).tolist())  # (1), (2)
+        r_wb, w_b, u_i = _orientation(r_wi, frames[2], motions[2], self.imu_angular_velocity(t).tolist())  # (1), (2)
         forces = _normal_forces(r_wb, frames, self.ft_left_ankle(t).tolist(), self.ft_right_ankle(t).tolist())  # (3)
         anchored = [self.anchored_left(t), self.anchored_right(t)]
         on, off = self.contact_force_on, self.contact_force_off
         contacts = [forces[0] > on or (anchored[0] and forces[0] > off),
                     forces[1] > on or (anchored[1] and forces[1] > off)]
         p_wb, anchors = self._position(t, r_wb, frames, forces, contacts, anchored)                    # (4)
-        u_i = _point_velocity(w_b, frames[2], motions[2])                                             # (5)
         dt = self.dt
         if contacts[0] or contacts[1]:
-            v_i = self._fused_velocity(t, dt, r_wb, u_i, (_point_velocity(w_b, frames[0], motions[0]),
-                                                          _point_velocity(w_b, frames[1], motions[1])),
-                                       forces, contacts)                                               # (5), (6)
+            v_i = self._fused_velocity(t, dt, r_wb, w_b, u_i, frames, motions, forces, contacts)          # (5), (6)
         else:
             v_i = self.prediction(t)[:3].tolist()
         values = self._values(t, dt, q_j, qd_j, r_wi, r_wb, w_b, u_i, p_wb, v_i)                        # (6), (7)
@@ -239,15 +236,26 @@ class FloatingBaseEstimator(dg.Entity):
                     anchors[k] = np.array([p + r for p, r in zip(p_wb, r_wf[k], strict=True)])
         return p_wb, anchors
 
-    def _fused_velocity(self, t: int, dt: float, r_wb: tuple[float, ...], u_i: list[float],
-                        u_f: tuple[list[float], list[float]], forces: list[float], contacts: list[bool]) -> list[float]:
-        """(5) and (6): the IMU velocity ``v_I`` (floats), with at least one foot in contact."""
+    def _fused_velocity(self, t: int, dt: float, r_wb: tuple[float, ...], w_b: list[float], u_i: list[float],
+                        frames: list[list[float]], motions: list[list[float]], forces: list[float],
+                        contacts: list[bool]) -> list[float]:
+        """(5) and (6): the IMU velocity ``v_I`` (floats), with at least one foot in contact, the feet's
+        ``u_F_k = w_B x r_BF_k + R_BF_k v_F_k`` from their frames' rows (as ``u_I``)."""
         f_left = forces[0] if contacts[0] else 0.0
         f_right = forces[1] if contacts[1] else 0.0
         w_left, w_right = f_left / (f_left + f_right), f_right / (f_left + f_right)
-        (l0, l1, l2), (r0, r1, r2) = u_f
-        k0, k1, k2 = _rotate(r_wb, [u_i[0] - (w_left * l0 + w_right * r0), u_i[1] - (w_left * l1 + w_right * r1),
-                                    u_i[2] - (w_left * l2 + w_right * r2)])
+        o0, o1, o2 = w_b
+        a00, a10, a20, a01, a11, a21, a02, a12, a22, p0, p1, p2 = frames[0]
+        b00, b10, b20, b01, b11, b21, b02, b12, b22, q0, q1, q2 = frames[1]
+        (m0, m1, m2, _, _, _), (n0, n1, n2, _, _, _) = motions[0], motions[1]
+        d0 = u_i[0] - (w_left * (o1 * p2 - o2 * p1 + a00 * m0 + a01 * m1 + a02 * m2)
+                       + w_right * (o1 * q2 - o2 * q1 + b00 * n0 + b01 * n1 + b02 * n2))  # u_I - sum w_k u_F_k
+        d1 = u_i[1] - (w_left * (o2 * p0 - o0 * p2 + a10 * m0 + a11 * m1 + a12 * m2)
+                       + w_right * (o2 * q0 - o0 * q2 + b10 * n0 + b11 * n1 + b12 * n2))
+        d2 = u_i[2] - (w_left * (o0 * p1 - o1 * p0 + a20 * m0 + a21 * m1 + a22 * m2)
+                       + w_right * (o0 * q1 - o1 * q0 + b20 * n0 + b21 * n1 + b22 * n2))
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = r_wb
+        k0, k1, k2 = r00 * d0 + r01 * d1 + r02 * d2, r10 * d0 + r11 * d1 + r12 * d2, r20 * d0 + r21 * d1 + r22 * d2
         if not self.velocity_initialised(t):
             return [k0, k1, k2]
         alpha = self._filter_weight(dt)
@@ -340,19 +348,22 @@ class FloatingBaseEstimator(dg.Entity):
 
 
 def _orientation(r_wi: list[list[float]], imu: list[float], motion: list[float],
-                 gyro: list[float]) -> tuple[tuple[float, ...], list[float]]:
-    """(1) ``R_WB = R_WI R_BI^T`` (rows, flattened) and (2) ``w_B = R_BI w_g - w_BI = R_BI (w_g - w_I)``
-    (``w_BI = R_BI w_I``, (K)), from ``R_WI`` (rows), the IMU frame's ``[R_BI by columns, r_BI]`` and
-    ``[v_I, w_I]``, and the gyro ``w_g``. Python floats, as every helper below (a numpy call costs
-    more than the dozen multiplications of a rotation)."""
+                 gyro: list[float]) -> tuple[tuple[float, ...], list[float], list[float]]:
+    """(1) ``R_WB = R_WI R_BI^T`` (rows, flattened), (2) ``w_B = R_BI w_g - w_BI = R_BI (w_g - w_I)``
+    (``w_BI = R_BI w_I``, (K)) and ``u_I = w_B x r_BI + R_BI v_I`` of (5), from ``R_WI`` (rows), the
+    IMU frame's ``[R_BI by columns, r_BI]`` and ``[v_I, w_I]``, and the gyro ``w_g``. Python floats,
+    as the rest of the estimate (a numpy call costs more than the dozen multiplications of a rotation)."""
     (e00, e01, e02), (e10, e11, e12), (e20, e21, e22) = r_wi
-    b00, b10, b20, b01, b11, b21, b02, b12, b22, _, _, _ = imu
-    _, _, _, m0, m1, m2 = motion
+    b00, b10, b20, b01, b11, b21, b02, b12, b22, i0, i1, i2 = imu
+    n0, n1, n2, m0, m1, m2 = motion
     g0, g1, g2 = gyro[0] - m0, gyro[1] - m1, gyro[2] - m2
+    o0, o1, o2 = b00 * g0 + b01 * g1 + b02 * g2, b10 * g0 + b11 * g1 + b12 * g2, b20 * g0 + b21 * g1 + b22 * g2
     return ((e00 * b00 + e01 * b01 + e02 * b02, e00 * b10 + e01 * b11 + e02 * b12, e00 * b20 + e01 * b21 + e02 * b22,
              e10 * b00 + e11 * b01 + e12 * b02, e10 * b10 + e11 * b11 + e12 * b12, e10 * b20 + e11 * b21 + e12 * b22,
              e20 * b00 + e21 * b01 + e22 * b02, e20 * b10 + e21 * b11 + e22 * b12, e20 * b20 + e21 * b21 + e22 * b22),
-            [b00 * g0 + b01 * g1 + b02 * g2, b10 * g0 + b11 * g1 + b12 * g2, b20 * g0 + b21 * g1 + b22 * g2])
+            [o0, o1, o2],
+            [o1 * i2 - o2 * i1 + b00 * n0 + b01 * n1 + b02 * n2, o2 * i0 - o0 * i2 + b10 * n0 + b11 * n1 + b12 * n2,
+             o0 * i1 - o1 * i0 + b20 * n0 + b21 * n1 + b22 * n2])
 
 
 def _normal_forces(r_wb: tuple[float, ...], frames: list[list[float]], left: list[float],
@@ -366,23 +377,6 @@ def _normal_forces(r_wb: tuple[float, ...], frames: list[list[float]], left: lis
             + (z0 * s02 + z1 * s12 + z2 * s22) * left[2],
             (z0 * t00 + z1 * t10 + z2 * t20) * right[0] + (z0 * t01 + z1 * t11 + z2 * t21) * right[1]
             + (z0 * t02 + z1 * t12 + z2 * t22) * right[2]]
-
-
-def _point_velocity(w_b: list[float], frame: list[float], motion: list[float]) -> list[float]:
-    """(5) ``u_X = w_B x r_BX + rd_BX``, ``rd_BX = R_BX v_X`` (K), from the frame's ``[R_BX by columns,
-    r_BX]`` and ``[v_X, w_X]``."""
-    w0, w1, w2 = w_b
-    x00, x10, x20, x01, x11, x21, x02, x12, x22, p0, p1, p2 = frame
-    v0, v1, v2, _, _, _ = motion
-    return [w1 * p2 - w2 * p1 + x00 * v0 + x01 * v1 + x02 * v2, w2 * p0 - w0 * p2 + x10 * v0 + x11 * v1 + x12 * v2,
-            w0 * p1 - w1 * p0 + x20 * v0 + x21 * v1 + x22 * v2]
-
-
-def _rotate(r: tuple[float, ...], x: list[float]) -> list[float]:
-    """``R x`` for a rotation given by its rows, flattened, and a 3-vector."""
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = r
-    x0, x1, x2 = x
-    return [r00 * x0 + r01 * x1 + r02 * x2, r10 * x0 + r11 * x1 + r12 * x2, r20 * x0 + r21 * x1 + r22 * x2]
 
 
 __all__ = ["Estimate", "FloatingBaseEstimator"]
