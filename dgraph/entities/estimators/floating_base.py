@@ -39,8 +39,8 @@ class FloatingBaseEstimator(dg.Entity):
     ``I`` IMU, ``F`` foot (sole) frame, ``S`` ankle F/T sensor frame; ``R_XY``, ``r_XY``
     rotation and position of ``Y`` in ``X``; ``r_BX``, ``R_BX`` and the velocities relative to
     the base ``rd_BX = J_X^lin(q_j) qd_j = R_BX v_X``, ``w_BX = J_X^ang(q_j) qd_j = R_BX w_X`` (in
-    ``B``; ``v_X``, ``w_X`` the frame's velocity in ``X``, (K)) come from one forward kinematics of
-    the encoders ``(q_j, qd_j)`` with the base at the identity.
+    ``B``; ``v_X``, ``w_X`` the frame's velocity in ``X``: (K) of ``RelativeKinematics``) come from
+    one forward kinematics of the encoders ``(q_j, qd_j)`` with the base at the identity.
 
     At tick ``t``, from the inputs at ``t`` and the states at ``t`` (nothing else):
 
