@@ -185,8 +185,7 @@ def _rows(elements: list[tuple[np.ndarray, ...]]) -> np.ndarray:
     a matrix column by column (Eigen's order); a RuntimeError if the members do not tile the
     elements that way, at one element's size apart.
     """
-    sizes = [member.size for member in elements[0]]
-    width = sum(sizes)
+    width = sum(member.size for member in elements[0])
     origin = elements[0][0].__array_interface__["data"][0]
     for i, members in enumerate(elements):
         found = [address - origin for member in members for address in _addresses(member)]

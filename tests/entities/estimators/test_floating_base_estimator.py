@@ -11,6 +11,7 @@ import dgraph as dg
 from dgraph.entities.estimators import FloatingBaseEstimator
 from dgraph.entities.estimators.leg_odometry import (
     RelativeKinematics,
+    _rows,
     complementary_alpha,
     matrix_to_quat,
     quat_to_matrix,
@@ -264,6 +265,21 @@ def test_relative_kinematics_leaves_the_given_model_alone():
     njoints = model.njoints
     kin = RelativeKinematics(model, frames)
     assert model.njoints == njoints and kin.model.njoints == 2 * njoints - 2
+
+
+def test_rows_view_consecutive_elements_and_refuse_any_other_layout():
+    memory = np.arange(24.0)  # two SE3-like elements: a 3x3 stored column by column, then a 3-vector
+    elements = [(memory[12 * i:12 * i + 9].reshape(3, 3, order="F"), memory[12 * i + 9:12 * i + 12]) for i in (0, 1)]
+    rows = _rows(elements)
+    assert rows.tolist() == memory.reshape(2, 12).tolist() and not rows.flags.writeable
+    memory[13] = -1.0  # a view: it follows the memory
+    assert rows[1, 1] == -1.0
+    with pytest.raises(RuntimeError, match="memory layout"):  # separate allocations
+        _rows([(np.zeros((3, 3)), np.zeros(3)), (np.zeros((3, 3)), np.zeros(3))])
+    with pytest.raises(RuntimeError, match="memory layout"):  # row by row is not Eigen's order
+        _rows([(memory[:9].reshape(3, 3), memory[9:12])])
+    with pytest.raises(RuntimeError, match="float64"):
+        _rows([(np.zeros(3, dtype=np.float32),)])
 
 
 def test_graph_file_builds_and_saves_the_estimator(tmp_path, sway):
