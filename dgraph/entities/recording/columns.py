@@ -1,4 +1,4 @@
-"""Growable numpy columns: one row per tick, amortised O(1) append, no per-row Python objects."""
+"""Growable numpy rows: one row per tick in a structured array, one numpy call per row appended."""
 
 from __future__ import annotations
 
@@ -9,36 +9,41 @@ import numpy as np
 INITIAL_ROWS = 1024
 
 
-class Column:
-    """Rows of equal shape stored in one numpy array that doubles when full.
+def field_dtype(value: Any) -> tuple[np.dtype, tuple[int, ...]]:
+    """The dtype and shape of a column whose first row is ``value``: its own dtype for numbers
+    (float, int, unsigned, bool), else ``object``."""
+    first = np.asarray(value)
+    return (first.dtype if first.dtype.kind in "fiub" else np.dtype(object)), first.shape
 
-    The dtype and row shape come from the first row (float, int, bool, or object for values
-    that are not numbers). A row of another shape raises ``ValueError``.
+
+class Table:
+    """Rows of a fixed number of columns, stored in one numpy structured array that doubles when full.
+
+    Each column's dtype and row shape come from the first row (:func:`field_dtype`); a row is
+    copied in with a single assignment, so appending costs one numpy call whatever the number
+    of columns. A value of another shape raises ``ValueError`` (a scalar fills a vector column,
+    as numpy broadcasts it).
     """
 
-    __slots__ = ("_data", "n")
+    __slots__ = ("_data", "n", "width")
 
-    def __init__(self) -> None:
+    def __init__(self, width: int) -> None:
+        self.width = width
         self._data: np.ndarray | None = None
         self.n = 0
 
-    def append(self, value: Any) -> None:
-        """Add one row (copied)."""
+    def append(self, row: tuple[Any, ...]) -> None:
+        """Add one row: a tuple of ``width`` values (copied)."""
         if self._data is None:
-            first = np.asarray(value)
-            dtype = first.dtype if first.dtype.kind in "fiub" else object
-            self._data = np.empty((INITIAL_ROWS, *first.shape), dtype=dtype)
+            fields = [(f"f{i}", *field_dtype(value)) for i, value in enumerate(row)]
+            self._data = np.empty(INITIAL_ROWS, dtype=np.dtype(fields, align=True))
         elif self.n == len(self._data):
             self._data = np.concatenate([self._data, np.empty_like(self._data)])
-        self._data[self.n] = value
+        self._data[self.n] = row
         self.n += 1
 
-    def last(self, count: int) -> np.ndarray:
-        """A view of the last ``count`` rows."""
-        return self.values()[self.n - count:]
-
-    def values(self) -> np.ndarray:
-        """A view of all rows (shape ``(n, *row_shape)``)."""
+    def column(self, i: int, start: int = 0) -> np.ndarray:
+        """A view of column ``i`` from row ``start`` on (shape ``(rows, *row_shape)``)."""
         if self._data is None:
             return np.zeros((0,))
-        return self._data[: self.n]
+        return self._data[f"f{i}"][start: self.n]

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.recording.columns import Column
+from dgraph.entities.recording.columns import Table
 from dgraph.entities.recording.rerun_stream import RerunStream, open_stream_for
 from dgraph.signals.signal import Signal
 
@@ -57,10 +57,10 @@ class Recorder(dg.Entity):
         if self.decimation < 1 or self.flush_every < 1:
             raise dg.ParamError(f"{self.name}: decimation and flush_every must be >= 1", entity=self.name)
         self._sources: list[Signal] | None = None
-        self._ticks = Column()
-        self._columns = {name: Column() for name in self.signals}
-        self._staged: tuple[int, list[Any]] | None = None
+        self._rows = Table(1 + len(self.signals))  # the tick, then one column per signal
+        self._staged: tuple[Any, ...] | None = None
         self._stream: RerunStream | None = None
+        self._plotted: list[tuple[int, str, list[str]]] | None = None
         self._pending = 0
         self.closed = False
         if self.npz_path and not self.npz_path.endswith(".npz"):
@@ -92,17 +92,14 @@ class Recorder(dg.Entity):
     def observe(self, t: int) -> None:
         """Read every recorded signal at ``t``; the row is kept when the tick commits."""
         sources = self._sources if self._sources is not None else self._open()
-        self._staged = (t, [sig(t) for sig in sources])
+        self._staged = (t, *[sig(t) for sig in sources])
 
     def commit_state(self, t_next: int) -> None:
         """The tick committed: append its row (a failed tick leaves no row)."""
-        if self._staged is None:
+        row, self._staged = self._staged, None
+        if row is None:
             return
-        t, values = self._staged
-        self._staged = None
-        self._ticks.append(t)
-        for name, value in zip(self.signals, values, strict=True):
-            self._columns[name].append(value)
+        self._rows.append(row)
         if self._stream is not None:
             self._pending += 1
             if self._pending >= self.flush_every:
@@ -113,28 +110,41 @@ class Recorder(dg.Entity):
         self._pending = 0
         if n == 0 or self._stream is None:
             return
-        ticks = self._ticks.last(n)
+        start = self._rows.n - n
+        ticks = self._rows.column(0, start)
         keep = ticks % self.decimation == 0
         if not keep.any():
             return
-        for name, sig in zip(self.signals, self._sources or [], strict=True):
-            values = self._columns[name].last(n)[keep]
-            if values.dtype.kind not in "fiub":
-                continue  # not numbers: kept in the .npz, not plotted
-            self._stream.send(f"signals/{name.replace('.', '/')}", component_names(sig, values.shape[1:]),
-                              ticks[keep], values.reshape(len(values), -1).astype(float))
+        if self._plotted is None:
+            self._plotted = self._plotted_series()
+        series = []
+        for i, path, names in self._plotted:
+            values = self._rows.column(i, start)[keep]
+            series.append((path, names, values.reshape(len(values), -1).astype(float)))
+        if series:
+            self._stream.send_series(ticks[keep], series)
+
+    def _plotted_series(self) -> list[tuple[int, str, list[str]]]:
+        """The columns sent to Rerun (numbers; other values are kept in the .npz, not plotted):
+        column index, entity path, component names."""
+        plotted = []
+        for i, (name, sig) in enumerate(zip(self.signals, self._sources or [], strict=True), start=1):
+            column = self._rows.column(i)
+            if column.dtype.kind in "fiub":
+                plotted.append((i, f"/signals/{name.replace('.', '/')}", component_names(sig, column.shape[1:])))
+        return plotted
 
     @property
     def ticks(self) -> np.ndarray:
         """The recorded ticks."""
-        return self._ticks.values().astype(np.int64)
+        return self._rows.column(0).astype(np.int64)
 
     def data(self) -> dict[str, np.ndarray]:
         """The recording so far: ``tick``, ``time`` (s) and one array per signal (ticks first)."""
         out = {"tick": self.ticks}
         out["time"] = out["tick"] * (self.graph.dt if self.graph is not None else 1.0)
-        for name, column in self._columns.items():
-            out[name] = column.values().copy()
+        for i, name in enumerate(self.signals, start=1):
+            out[name] = self._rows.column(i).copy()
         return out
 
     def close(self) -> None:

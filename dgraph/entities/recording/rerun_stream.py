@@ -2,8 +2,9 @@
 
 Rerun is imported only when a stream is opened. Sinks: ``save`` (an .rrd file, the default
 when headless), ``spawn`` (a local viewer process) and ``serve`` (gRPC plus a web viewer on
-loopback). Series are sent with ``send_columns`` in blocks, so logging costs a few µs per
-tick instead of ~37 µs per ``log`` call.
+loopback). Series are sent in blocks of ticks, every series of a block in one Arrow record batch
+(one ``send_record_batch`` call: Rerun's cost is per call and per entity, not per row), so
+logging costs a few µs per tick instead of ~37 µs per ``log`` call.
 
 A sink is opened once: :func:`open_stream` returns the stream already open for the same sink
 (the same .rrd file, or the same viewer/server for a graph name) and counts its users, so the
@@ -54,13 +55,29 @@ class RerunStream:
         rr = self._rr
         return [rr.TimeColumn("tick", sequence=ticks), rr.TimeColumn("time", duration=ticks * self.dt)]
 
-    def send(self, path: str, names: list[str], ticks: np.ndarray, values: np.ndarray) -> None:
-        """Send ``values`` (rows = ticks, columns = components) as series named ``names``."""
-        rr = self._rr
-        if path not in self._declared:
-            self.rec.log(path, rr.SeriesLines(names=names), static=True)
-            self._declared.add(path)
-        self.rec.send_columns(path, indexes=self.indexes(ticks), columns=rr.Scalars.columns(scalars=values))
+    def send_batch(self, ticks: np.ndarray, fields: list[Any], columns: list[Any]) -> None:
+        """Send one Arrow record batch: the ``tick`` and ``time`` columns of ``ticks``, then the
+        component ``columns`` described by ``fields`` (see :func:`component_field`)."""
+        import pyarrow as pa
+
+        indexes = [index.as_arrow_array() for index in self.indexes(ticks)]
+        schema = pa.schema(index_fields() + fields)
+        self.rec.send_record_batch(pa.RecordBatch.from_arrays(indexes + columns, schema=schema))
+
+    def send_series(self, ticks: np.ndarray, series: list[tuple[str, list[str], np.ndarray]]) -> None:
+        """Send time series at ``ticks``, all in one batch: for each ``(path, names, values)``,
+        ``values`` (rows = ticks, columns = components, float) as series named ``names``."""
+        import pyarrow as pa
+
+        fields, columns = [], []
+        for path, names, values in series:
+            if path not in self._declared:
+                self.rec.log(path, self._rr.SeriesLines(names=names), static=True)
+                self._declared.add(path)
+            fields.append(component_field(path, self._rr.Scalars.descriptor_scalars(), pa.list_(pa.float64())))
+            offsets = pa.array(np.arange(len(values) + 1, dtype=np.int32) * values.shape[1])
+            columns.append(pa.ListArray.from_arrays(offsets, pa.array(values.ravel())))
+        self.send_batch(ticks, fields, columns)
 
     def close(self) -> None:
         """Release this user's share; the last user flushes and closes the sink."""
@@ -71,6 +88,24 @@ class RerunStream:
             del _OPEN[self._key]
         self.rec.flush()
         self.rec.disconnect()
+
+
+def index_fields() -> list[Any]:
+    """Arrow fields of the ``tick`` (sequence) and ``time`` (duration) columns, tagged as Rerun indexes."""
+    import pyarrow as pa
+
+    return [pa.field(name, kind, metadata={"rerun:kind": "index", "rerun:index_name": name})
+            for name, kind in (("tick", pa.int64()), ("time", pa.duration("ns")))]
+
+
+def component_field(path: str, descriptor: Any, arrow_type: Any) -> Any:
+    """Arrow field of a component column of entity ``path`` (a Rerun ``ComponentDescriptor``),
+    tagged with Rerun's column metadata."""
+    import pyarrow as pa
+
+    return pa.field(f"{path}:{descriptor.component}", arrow_type, metadata={
+        "rerun:kind": "data", "rerun:entity_path": path, "rerun:archetype": descriptor.archetype,
+        "rerun:component": descriptor.component, "rerun:component_type": descriptor.component_type})
 
 
 _OPEN: dict[tuple[str, str], RerunStream] = {}
