@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.recording.rerun_stream import RerunStream, open_stream_for
+from dgraph.entities.recording.rerun_stream import RerunStream, component_field, open_stream_for
 
 FLOOR_HALF_SIZE = 2.0
 """Half side of the floor square, in metres."""
@@ -127,7 +127,7 @@ class RobotView(dg.Entity):
         self._joints = np.array([link.joint for link in self.links])
         self._jMf = np.array([link.placement.homogeneous for link in self.links])
         self._link_paths = [f"/{self.path}/{link.name}" for link in self.links]
-        self._schema: Any = None
+        self._fields: list[Any] | None = None
         self._data: Any = None
         self._stream: RerunStream | None = None
         self._statics_sent = False
@@ -171,8 +171,7 @@ class RobotView(dg.Entity):
             self._data = self.pin_model.createData()
         data = self._data
         pin.forwardKinematics(self.pin_model, data, q)
-        oMi = data.oMi
-        joints = np.array([oMi[j].homogeneous for j in range(self.pin_model.njoints)])
+        joints = np.array([oMi.homogeneous for oMi in data.oMi.tolist()])  # tolist: one binding call
         return joints[self._joints] @ self._jMf
 
     # -- tick -----------------------------------------------------------------------------
@@ -206,45 +205,40 @@ class RobotView(dg.Entity):
         if t - self._last_send >= self.flush_every:
             self._send()
 
-    def _batch_schema(self) -> Any:
-        """Arrow schema of a batch of poses: ``tick``, ``time``, then per link its translation and
-        quaternion columns, tagged with Rerun's column metadata (entity path, component)."""
+    def _pose_fields(self, rr: Any) -> list[Any]:
+        """Arrow fields of a batch of poses: per link its translation and quaternion columns
+        (lists of float32 triples / quadruples), tagged with Rerun's column metadata."""
         import pyarrow as pa
 
-        def component(path: str, name: str, ctype: str, size: int) -> Any:
-            item = pa.list_(pa.field("item", pa.float32(), nullable=False), size)
-            return pa.field(f"{path}:Transform3D:{name}", pa.list_(item), metadata={
-                "rerun:kind": "data", "rerun:entity_path": path, "rerun:archetype": "rerun.archetypes.Transform3D",
-                "rerun:component": f"Transform3D:{name}", "rerun:component_type": f"rerun.components.{ctype}"})
-
-        fields = [pa.field(n, t, metadata={"rerun:kind": "index", "rerun:index_name": n})
-                  for n, t in (("tick", pa.int64()), ("time", pa.duration("ns")))]
+        fields = []
         for path in self._link_paths:
-            fields += [component(path, "translation", "Translation3D", 3),
-                       component(path, "quaternion", "RotationQuat", 4)]
-        return pa.schema(fields)
+            for descriptor, size in ((rr.Transform3D.descriptor_translation(), 3),
+                                     (rr.Transform3D.descriptor_quaternion(), 4)):
+                item = pa.list_(pa.field("item", pa.float32(), nullable=False), size)
+                fields.append(component_field(path, descriptor, pa.list_(item)))
+        return fields
 
     def _send(self) -> None:
         if not self._ticks or self._stream is None:
             return
         import pyarrow as pa
 
-        if self._schema is None:
-            self._schema = self._batch_schema()
+        if self._fields is None:
+            self._fields = self._pose_fields(self._stream._rr)
         ticks = np.array(self._ticks, dtype=np.int64)
         poses = np.stack(self._poses, axis=1)  # (links, ticks, 4, 4)
         self._ticks, self._poses = [], []
         self._last_send = int(ticks[-1])
-        translations = poses[:, :, :3, 3].astype(np.float32)
-        quaternions = quaternions_xyzw(poses[:, :, :3, :3]).astype(np.float32)
-        offsets = pa.array(np.arange(len(ticks) + 1, dtype=np.int32))
-        columns = [index.as_arrow_array() for index in self._stream.indexes(ticks)]
-        fields = list(self._schema)[2:]
-        for k in range(len(self.links)):
-            for values, field in ((translations[k], fields[2 * k]), (quaternions[k], fields[2 * k + 1])):
-                rows = pa.FixedSizeListArray.from_arrays(values.ravel(), type=field.type.value_type)
-                columns.append(pa.ListArray.from_arrays(offsets, rows, type=field.type))
-        self._stream.rec.send_record_batch(pa.RecordBatch.from_arrays(columns, schema=self._schema))
+        n, links = len(ticks), len(self.links)
+        # one Arrow array per component holding every link's rows, then a zero-copy slice per link
+        offsets = pa.array(np.arange(n * links + 1, dtype=np.int32))
+        blocks = []
+        for values, field in ((poses[:, :, :3, 3], self._fields[0]),
+                              (quaternions_xyzw(poses[:, :, :3, :3]), self._fields[1])):
+            rows = pa.FixedSizeListArray.from_arrays(values.astype(np.float32).ravel(), type=field.type.value_type)
+            blocks.append(pa.ListArray.from_arrays(offsets, rows, type=field.type))
+        columns = [block.slice(k * n, n) for k in range(links) for block in blocks]
+        self._stream.send_batch(ticks, self._fields, columns)
 
     def _log_statics(self) -> None:
         stream = self._stream
