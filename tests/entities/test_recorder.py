@@ -102,6 +102,12 @@ def test_default_is_an_rrd_file_named_after_the_graph(tmp_path):
         Recorder("bad", signals=["dev.x"], decimation=0)
 
 
+def test_sends_are_buffered_longer_to_a_file_than_to_a_viewer():
+    assert Recorder("file", signals=["dev.x"]).flush_every == 1000
+    assert Recorder("live", signals=["dev.x"], rerun="serve").flush_every == 200
+    assert Recorder("set", signals=["dev.x"], rerun="spawn", flush_every=5).flush_every == 5
+
+
 def test_close_is_idempotent_and_in_memory_data(tmp_path):
     g = build(tmp_path, rerun="off")
     g.run(ticks=5)

@@ -190,3 +190,4 @@ def test_parameters_are_checked():
     with pytest.raises(dg.ParamError, match="decimation"):
         RobotView("v", decimation=0)
     assert RobotView("v").q.spec.shape == (39,)
+    assert RobotView("v").flush_every == 1000 and RobotView("v", rerun="spawn").flush_every == 200
