@@ -82,11 +82,12 @@ class RobotView(dg.Entity):
     (``pinocchio.forwardKinematics``, ``oMf = oMi[joint] * jMf`` for every link that carries a
     geometry) and logged as ``Transform3D`` of ``<path>/<link>`` on the ``tick`` and ``time``
     timelines (translation and quaternion). Like the :class:`Recorder`, it reads ``q`` in
-    :meth:`observe` and keeps the poses only when the tick commits; poses are buffered and sent
-    every ``flush_every`` ticks (default 1000 to a file, 200 to a viewer) as one Arrow record
-    batch holding a column per link and component (one ``send_record_batch`` call: Rerun's cost
-    is per call and per entity, not per row), so TALOS (52 links) costs about 10 µs per tick on
-    average at ``decimation=20`` to a file.
+    :meth:`observe` and keeps it only when the tick commits; the configurations are buffered and,
+    every ``flush_every`` ticks (default 1000 to a file, 200 to a viewer), their poses are
+    computed in one go (one warm loop instead of one cold call every ``decimation`` ticks) and
+    sent as one Arrow record batch holding a column per link and component (one
+    ``send_record_batch`` call: Rerun's cost is per call and per entity, not per row), so TALOS
+    (52 links) costs about 10 µs per tick on average at ``decimation=20`` to a file.
 
     It writes into the same Rerun recording as the graph's recorder: both open their sink
     with :func:`~dgraph.entities.recording.rerun_stream.open_stream`, which shares one stream
@@ -137,7 +138,7 @@ class RobotView(dg.Entity):
         self._statics_sent = False
         self._staged: tuple[int, np.ndarray] | None = None
         self._ticks: list[int] = []
-        self._poses: list[np.ndarray] = []
+        self._qs: list[np.ndarray] = []  # the configurations of the buffered ticks
         self._last_send: int | None = None
         self.skipped: list[str] = []  # geometries that could not be drawn
         self.closed = False
@@ -167,16 +168,19 @@ class RobotView(dg.Entity):
         return list(links.values())
 
     # -- poses ----------------------------------------------------------------------------
-    def poses(self, q: np.ndarray) -> np.ndarray:
-        """World poses of the links (homogeneous matrices, shape ``(links, 4, 4)``) at ``q``."""
+    def poses(self, qs: np.ndarray) -> np.ndarray:
+        """World poses of the links at each configuration (row) of ``qs``: homogeneous matrices,
+        shape ``(len(qs), links, 4, 4)``."""
         import pinocchio as pin
 
         if self._data is None:
             self._data = self.pin_model.createData()
-        data = self._data
-        pin.forwardKinematics(self.pin_model, data, q)
-        joints = np.array([oMi.homogeneous for oMi in data.oMi.tolist()])  # tolist: one binding call
-        return joints[self._joints] @ self._jMf
+        model, data = self.pin_model, self._data
+        joints = []
+        for q in qs:
+            pin.forwardKinematics(model, data, q)
+            joints += [oMi.homogeneous for oMi in data.oMi.tolist()]  # tolist: one binding call
+        return np.array(joints).reshape(len(qs), model.njoints, 4, 4)[:, self._joints] @ self._jMf
 
     # -- tick -----------------------------------------------------------------------------
     def _open(self) -> RerunStream:
@@ -186,24 +190,24 @@ class RobotView(dg.Entity):
         return self._stream
 
     def observe(self, t: int) -> None:
-        """Every ``decimation`` ticks, compute the link poses at ``q(t)``; kept if the tick commits."""
+        """Every ``decimation`` ticks, read ``q(t)`` (copied); kept if the tick commits."""
         if self.closed or self.rerun == "off":
             return
         if self._stream is None:
             self._open()
         first = not self._statics_sent and not self._ticks
-        self._staged = (t, self.poses(self.q(t))) if t % self.decimation == 0 or first else None
+        self._staged = (t, np.array(self.q(t))) if t % self.decimation == 0 or first else None
 
     def commit_state(self, t_next: int) -> None:
-        """The tick committed: log the statics once, buffer the poses, send every ``flush_every``."""
+        """The tick committed: log the statics once, buffer ``q``, send every ``flush_every``."""
         staged, self._staged = self._staged, None
         if staged is None or self._stream is None:
             return
         if not self._statics_sent:
             self._log_statics()
-        t, pose = staged
+        t, q = staged
         self._ticks.append(t)
-        self._poses.append(pose)
+        self._qs.append(q)
         if self._last_send is None:
             self._last_send = t
         if t - self._last_send >= self.flush_every:
@@ -230,8 +234,8 @@ class RobotView(dg.Entity):
         if self._fields is None:
             self._fields = self._pose_fields(self._stream._rr)
         ticks = np.array(self._ticks, dtype=np.int64)
-        poses = np.stack(self._poses, axis=1)  # (links, ticks, 4, 4)
-        self._ticks, self._poses = [], []
+        poses = self.poses(np.array(self._qs)).transpose(1, 0, 2, 3)  # (links, ticks, 4, 4)
+        self._ticks, self._qs = [], []
         self._last_send = int(ticks[-1])
         n, links = len(ticks), len(self.links)
         # one Arrow array per component holding every link's rows, then a zero-copy slice per link
