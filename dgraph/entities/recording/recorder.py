@@ -116,15 +116,15 @@ class Recorder(dg.Entity):
             return
         start = self._rows.n - n
         ticks = self._rows.column(0, start)
-        keep = ticks % self.decimation == 0
-        if not keep.any():
+        keep = ticks % self.decimation == 0 if self.decimation > 1 else slice(None)  # a slice: no copy
+        if not ticks[keep].size:
             return
         if self._plotted is None:
             self._plotted = self._plotted_series()
         series = []
         for i, path, names in self._plotted:
-            values = self._rows.column(i, start)[keep]
-            series.append((path, names, values.reshape(len(values), -1).astype(float)))
+            values = np.ascontiguousarray(self._rows.column(i, start)[keep], dtype=float)  # one copy at most
+            series.append((path, names, values.reshape(len(values), -1)))
         if series:
             self._stream.send_series(ticks[keep], series)
 

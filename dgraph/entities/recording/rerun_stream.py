@@ -44,7 +44,7 @@ class RerunStream:
         elif mode == "serve":
             self.url = self.rec.serve_grpc()
             rr.serve_web_viewer(open_browser=False, connect_to=self.url)
-        self._declared: set[str] = set()
+        self._series_fields: dict[str, Any] = {}  # the Arrow field of each series sent, by entity path
         self.users = 1
         self.application_id = application_id
         self.owner: object = None
@@ -71,10 +71,11 @@ class RerunStream:
 
         fields, columns = [], []
         for path, names, values in series:
-            if path not in self._declared:
+            if path not in self._series_fields:  # a new series: its names, once, as static data
                 self.rec.log(path, self._rr.SeriesLines(names=names), static=True)
-                self._declared.add(path)
-            fields.append(component_field(path, self._rr.Scalars.descriptor_scalars(), pa.list_(pa.float64())))
+                self._series_fields[path] = component_field(path, self._rr.Scalars.descriptor_scalars(),
+                                                            pa.list_(pa.float64()))
+            fields.append(self._series_fields[path])
             offsets = pa.array(np.arange(len(values) + 1, dtype=np.int32) * values.shape[1])
             columns.append(pa.ListArray.from_arrays(offsets, pa.array(values.ravel())))
         self.send_batch(ticks, fields, columns)
