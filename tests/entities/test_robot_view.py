@@ -14,7 +14,7 @@ from dgraph.entities.devices import KinematicDevice
 from dgraph.entities.operators import Constant
 from dgraph.entities.recording import Recorder, RobotView, open_stream, read_series
 from dgraph.entities.recording.robot_view import load_robot, quaternions_xyzw
-from tests.conftest import Scale
+from tests.conftest import Scale, Ticker
 
 pin = pytest.importorskip("pinocchio")
 chunk = pytest.importorskip("rerun.chunk")
@@ -159,6 +159,23 @@ def test_a_failed_tick_logs_nothing(tmp_path):
     g.run(ticks=3)
     g.close()
     assert list(poses_over_time(read_rrd(tmp_path / "f.rrd")["/world/robot/base_link"])) == [0]
+
+
+def test_a_configuration_of_the_wrong_size_fails_the_tick_where_it_is_read(tmp_path):
+    class Short(dg.Entity):
+        @dg.output(shape=(39,), depends=())
+        def q(self, t):
+            return np.zeros(38)  # computed values are not checked on the hot path
+
+    g = dg.Graph(dt=0.001, name="short_q")
+    g.add(Ticker("dev"))
+    g.add(Short("short"))
+    view = g.add(RobotView("view", rrd_path=str(tmp_path / "s.rrd")))
+    g.plug("short.q", "view.q")
+    with pytest.raises(dg.SpecError, match=r"view\.q: expected shape \(39,\), got \(38,\) at tick 0"):
+        g.step()
+    assert view._ticks == [] and view._qs == []
+    g.close()
 
 
 def test_streams_are_shared_per_file_and_graph_and_closed_by_the_last_user(tmp_path):

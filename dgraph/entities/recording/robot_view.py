@@ -190,13 +190,20 @@ class RobotView(dg.Entity):
         return self._stream
 
     def observe(self, t: int) -> None:
-        """Every ``decimation`` ticks, read ``q(t)`` (copied); kept if the tick commits."""
+        """Every ``decimation`` ticks, read ``q(t)`` (copied; its poses are computed at the send);
+        kept if the tick commits. A ``q`` of the wrong size fails the tick here."""
         if self.closed or self.rerun == "off":
             return
         if self._stream is None:
             self._open()
-        first = not self._statics_sent and not self._ticks
-        self._staged = (t, np.array(self.q(t))) if t % self.decimation == 0 or first else None
+        if t % self.decimation and (self._statics_sent or self._ticks):
+            self._staged = None
+            return
+        q = np.array(self.q(t), dtype=float)
+        if q.shape != (self.nq,):
+            raise dg.SpecError(f"{self.name}.q: expected shape ({self.nq},), got {q.shape} at tick {t}",
+                               entity=self.name, signal="q")
+        self._staged = (t, q)
 
     def commit_state(self, t_next: int) -> None:
         """The tick committed: log the statics once, buffer ``q``, send every ``flush_every``."""
