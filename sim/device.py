@@ -190,6 +190,9 @@ class MujocoDevice(dg.Device):
         sensors = self.sim.sensors
         # force then torque of each F/T sensor, in FT_SENSORS order: one block of sensordata
         self._ft_states = [getattr(self, f"ft_{k}") for k in FT_SENSORS]
+        self._tick_states = [self.q, self.v, self.imu_orientation, self.imu_angular_velocity,
+                             self.imu_linear_acceleration, self.encoder_position, self.encoder_velocity,
+                             *self._ft_states, self.joint_torque, self.contact_force_total, self.sim_time]
         start = sensors.force[FT_SENSORS[0]]
         expected = [start + 6 * i + o for i in range(len(FT_SENSORS)) for o in (0, 3)]
         if [a for k in FT_SENSORS for a in (sensors.force[k], sensors.torque[k])] != expected:
@@ -326,21 +329,8 @@ class MujocoDevice(dg.Device):
                                  f"at tick {t + 1})", entity=self.name, signal="fallen")
 
     def commit_state(self, t_next: int) -> None:
-        """Publish the staged state at ``t + 1``."""
-        self.q.commit(t_next)
-        self.v.commit(t_next)
-        self.imu_orientation.commit(t_next)
-        self.imu_angular_velocity.commit(t_next)
-        self.imu_linear_acceleration.commit(t_next)
-        self.encoder_position.commit(t_next)
-        self.encoder_velocity.commit(t_next)
-        self.ft_left_ankle.commit(t_next)
-        self.ft_right_ankle.commit(t_next)
-        self.ft_left_wrist.commit(t_next)
-        self.ft_right_wrist.commit(t_next)
-        self.joint_torque.commit(t_next)
-        self.contact_force_total.commit(t_next)
-        self.sim_time.commit(t_next)
+        """Publish the staged state at ``t + 1`` (the states of every tick in one go)."""
+        dg.commit_all(self._tick_states, t_next)
         if self._fallen_staged:
             self.fallen.commit(t_next)
             self._fallen_staged = False

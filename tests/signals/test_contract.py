@@ -509,3 +509,23 @@ def test_staging_without_a_copy_keeps_the_array_and_still_refuses_nan(graph):
     assert x.value is not fresh and x.value.tolist() == [1.0, 2.0]
     with pytest.raises(dg.SpecError, match="NaN"):
         x.stage(np.array([np.nan, 0.0]), copy=False)
+
+
+def test_committing_states_together_invalidates_their_readers_once_and_alike(graph):
+    class Pair(dg.Entity):
+        has_state = True
+        a = dg.State(shape=(), initial=0.0)
+        b = dg.State(shape=(), initial=0.0)
+
+    pair = graph.add(Pair("pair"))
+    readers = graph.add(Sum2("both"))
+    graph.plug("pair.a", "both.a")
+    graph.plug("pair.b", "both.b")
+    assert readers.s(0) == 0.0
+    pair.a.stage(1.0)
+    pair.b.stage(2.0)
+    dg.commit_all([pair.a, pair.b], 1)
+    assert (pair.a.time, pair.b.time, readers.s.stale) == (1, 1, True)
+    assert readers.s(1) == 3.0 and readers.s.count == 2
+    with pytest.raises(dg.DGraphError, match="without a staged value"):
+        dg.commit_all([pair.a], 2)

@@ -43,6 +43,7 @@ class ContactConstraint:
     def world_wrench(self, forces: np.ndarray) -> np.ndarray:
         """The contact wrench ``[force, torque]`` at the contact frame origin, world axes (a point
         contact, whose generator gives a force only, has no torque)."""
-        wrench = self.force_generator @ forces
-        torque = self.rotation @ wrench[3:] if len(wrench) == 6 else np.zeros(3)
-        return np.concatenate([self.rotation @ wrench[:3], torque])
+        wrench = np.dot(self.force_generator, forces)
+        if len(wrench) != 6:
+            return np.concatenate([np.dot(self.rotation, wrench), np.zeros(3)])
+        return np.dot(wrench.reshape(2, 3), self.rotation.T).reshape(6)  # rows R f, R tau

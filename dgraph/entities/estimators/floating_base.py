@@ -342,8 +342,7 @@ class FloatingBaseEstimator(dg.Entity):
 
     def commit_state(self, t_next: int) -> None:
         """Publish the staged states at ``t + 1``."""
-        for state in self._pending:
-            state.commit(t_next)
+        dg.commit_all(self._pending, t_next)
         self._pending = []
 
 
