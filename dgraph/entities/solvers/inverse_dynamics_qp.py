@@ -412,6 +412,7 @@ class InverseDynamicsQP:
         self.eps_abs, self.max_iterations, self.rho = eps_abs, max_iterations, rho
         self.acceleration_weight = acceleration_weight
         self._workspaces: dict[tuple[object, ...], Workspace] = {}
+        self._last_workspace: tuple[bool, list[tuple[str, int]], Workspace] | None = None
         self._task_rows: dict[tuple[tuple[int, ...], tuple[bool, ...]], TaskRows] = {}
         self._previous_tasks: list[tuple[object, object]] = []  # each task's matrix and weights at the last tick
         self._steady: tuple[bool, ...] = ()
@@ -420,11 +421,17 @@ class InverseDynamicsQP:
 
     # -- assembly ----------------------------------------------------------------------------
     def workspace(self, contacts: list[ContactConstraint], passivity_row: bool) -> Workspace:
-        """The workspace of this set of active contacts (by name and size)."""
+        """The workspace of this set of active contacts (by name and size; the same set as at
+        the previous call is recognised by names and motion rows alone)."""
+        names = [(c.name, len(c.motion_rhs)) for c in contacts]
+        last = self._last_workspace
+        if last is not None and last[0] == passivity_row and last[1] == names:
+            return last[2]
         key = (passivity_row, *((c.name, c.n_forces, len(c.friction_lower), len(c.motion_rhs)) for c in contacts))
         ws = self._workspaces.get(key)
         if ws is None:
             ws = self._workspaces[key] = Workspace(self, contacts, passivity_row)
+        self._last_workspace = (passivity_row, names, ws)
         return ws
 
     def task_rows(self, tasks: list[TaskEquation], tick: int | None = None) -> TaskRows:
@@ -433,12 +440,12 @@ class InverseDynamicsQP:
         previous call); further calls in the same tick keep the tick's first answer."""
         if tick is None or tick != self._tasks_tick:
             previous = self._previous_tasks
-            self._steady = tuple(i < len(previous) and task.matrix is previous[i][0] and task.weight is previous[i][1]
-                                 for i, task in enumerate(tasks))
-            self._previous_tasks = [(task.matrix, task.weight) for task in tasks]
-            self._tasks_tick = tick
+            arrays = [(task.matrix, task.weight) for task in tasks]
+            self._steady = tuple(a[0] is b[0] and a[1] is b[1] for a, b in zip(arrays, previous, strict=False)) \
+                if len(previous) == len(arrays) else (False,) * len(arrays)
+            self._previous_tasks, self._tasks_tick = arrays, tick
         steady = self._steady if len(self._steady) == len(tasks) else (False,) * len(tasks)
-        key = (tuple(len(task.vector) for task in tasks), steady)
+        key = (tuple([len(task.vector) for task in tasks]), steady)
         rows = self._task_rows.get(key)
         if rows is None:
             rows = self._task_rows[key] = TaskRows(*key, self.nv)
