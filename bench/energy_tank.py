@@ -20,12 +20,16 @@ import argparse
 import time
 from pathlib import Path
 
-import numpy as np
-import yaml
-from calibration import calibrate, calibration_line
+import calibration
 
-import dgraph as dg
-from dgraph.files import loads, parse
+calibration.single_threaded()  # before numpy: one BLAS/OpenMP thread, as the other benchmarks
+
+import numpy as np  # noqa: E402
+import yaml  # noqa: E402
+from calibration import calibrate, calibration_line  # noqa: E402
+
+import dgraph as dg  # noqa: E402
+from dgraph.files import loads, parse  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 GRAPHS = ROOT / "graphs"

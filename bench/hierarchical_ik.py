@@ -28,8 +28,12 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-from calibration import calibrate, calibration_line
+import calibration
+
+calibration.single_threaded()  # before numpy: one BLAS/OpenMP thread, as the other benchmarks
+
+import numpy as np  # noqa: E402
+from calibration import calibrate, calibration_line  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests" / "entities" / "hierarchy"))
