@@ -163,6 +163,11 @@ class Entity:
                                           f"{dep!r}, which is not a signal of {self.type_name}",
                                           entity=self.name, signal=out.name)
                     deps.append(self._signals[dep])
+            if out.on_demand is not True:
+                for name in out.on_demand:
+                    if name not in self._signals or (out.depends is not None and name not in out.depends):
+                        raise DGraphError(f"{self.name}.{out.name} declares {name!r} on demand, which is not one of "
+                                          f"its dependencies", entity=self.name, signal=out.name)
             out.deps = deps
             for dep in deps:
                 (dep._subs if isinstance(dep, Input) else dep._down).append(out)

@@ -191,14 +191,17 @@ class Output(Signal):
         """The stale outputs this one reads, directly or not, in dependency order (each after
         everything it reads): an iterative depth-first search that stops at fresh outputs, at
         States, at periodic outputs that hold, and at on-demand dependencies. Its cost is the
-        number of stale outputs found, not the size of the graph."""
+        number of stale outputs found, not the size of the graph. An output on another clock (an
+        entity outside this graph, plugged by hand) is left to its reader: read through the
+        input, it moves its own clock to ``t`` first."""
         mark = self._mark = next(_PLANS)
+        clock = self._clock
         order: list[Output] = []
         stack = [(self, iter(self._upstream_outputs()))]
         while stack:
             node, pending = stack[-1]
             for up in pending:
-                if up._stale and up._mark != mark and not (up.period > 1 and up._holds(t)):
+                if up._stale and up._mark != mark and up._clock is clock and not (up.period > 1 and up._holds(t)):
                     up._mark = mark
                     stack.append((up, iter(up._upstream_outputs())))
                     break
@@ -434,6 +437,9 @@ class State(Output):
 def commit_all(states: Sequence[State], t: int) -> None:
     """Commit every state of ``states`` at tick ``t``, then invalidate all their readers in one
     walk (the same result as committing them one by one; a device commits its sensors so)."""
+    for state in states:  # nothing is published unless everything can be
+        if state._staged is _UNSET:
+            state.publish(t)  # raises, naming it
     readers: list[Output] = []
     for state in states:
         readers += state.publish(t)

@@ -152,3 +152,27 @@ def test_a_fixed_base_robot_commands_its_whole_configuration():
     integrator.command.set([2.0])
     assert np.allclose(integrator.joint_position(0), [0.5 + 2.0 * DT])
     assert np.allclose(integrator.joint_velocity(0), [2.0])
+
+
+def test_the_measured_state_is_computed_only_when_the_integrator_synchronises():
+    """``measured_q`` and ``measured_v`` are read on demand: at tick 0 and every sync tick."""
+
+    class Measurement(dg.Entity):
+        @dg.output(shape=(9,), depends=("t",))
+        def q(self, t):
+            return start_state(floating_model())[0]
+
+        @dg.output(shape=(8,), depends=("t",))
+        def v(self, t):
+            return np.zeros(8)
+
+    graph, integrator, _ = make("velocity", sync_period=5)
+    measurement = graph.add(Measurement("measured"))
+    graph.plug("measured.q", "integrator.measured_q")
+    graph.plug("measured.v", "integrator.measured_v")
+    integrator.command.set(np.zeros(8))
+    for _ in range(10):
+        integrator.q(graph.t)
+        integrator.v(graph.t)
+        graph.step()
+    assert (measurement.q.count, measurement.v.count) == (2, 2)  # ticks 0 and 5

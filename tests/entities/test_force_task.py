@@ -116,3 +116,12 @@ def test_parameters_are_checked():
         ForceTask("ft", size=7)
     with pytest.raises(dg.ParamError):
         ForceTask("ft", integral_limit=-1.0)
+
+
+def test_an_inactive_task_needs_no_measurement():
+    """While inactive the force is the reference alone: the measured force (read only while
+    active, on demand) is not computed, and may be unplugged."""
+    _, task = task_graph()
+    task.reference.set(np.array([0.0, 0.0, 10.0]))
+    task.active.set(False)
+    assert task.force(0).tolist() == [0.0, 0.0, 10.0] and task.error.count == 0

@@ -527,5 +527,37 @@ def test_committing_states_together_invalidates_their_readers_once_and_alike(gra
     dg.commit_all([pair.a, pair.b], 1)
     assert (pair.a.time, pair.b.time, readers.s.stale) == (1, 1, True)
     assert readers.s(1) == 3.0 and readers.s.count == 2
-    with pytest.raises(dg.DGraphError, match="without a staged value"):
-        dg.commit_all([pair.a], 2)
+    pair.a.stage(5.0)
+    with pytest.raises(dg.DGraphError, match=r"pair\.b: commit at tick 2 without a staged value"):
+        dg.commit_all([pair.a, pair.b], 2)
+    assert pair.a.value == 1.0 and pair.a.time == 1  # nothing published: the states stay consistent
+
+
+def test_an_on_demand_name_must_be_a_dependency():
+    class Typo(dg.Entity):
+        u = dg.Input(shape=())
+
+        @dg.output(shape=(), depends=("u",), on_demand=("uu",))
+        def y(self, t):
+            return self.u(t)
+
+    with pytest.raises(dg.DGraphError, match=r"typo\.y declares 'uu' on demand"):
+        Typo("typo")
+
+
+def test_an_output_on_another_clock_still_computes_once_per_tick():
+    """Entities outside a graph have clocks of their own; plugged by hand, a time-varying source
+    is left to its reader's input, which moves the source's clock first."""
+    class Shifted(dg.Entity):
+        c = dg.Input(shape=(), default=0.0)
+
+        @dg.output(shape=(), depends=("c", "t"))
+        def y(self, t):
+            return self.c(t) + t
+
+    source, reader = Shifted("source"), Scale("reader")
+    reader.u.plug(source.y)
+    for t in range(3):
+        source.c.set(10.0 * t)  # invalidates the reader too (across clocks, through the plug)
+        assert reader.y(t) == 2.0 * (11.0 * t)
+    assert source.y.count == 3 and reader.y.count == 3

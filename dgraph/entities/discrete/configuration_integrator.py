@@ -84,12 +84,12 @@ class ConfigurationIntegrator(dg.Entity):
     def _synchronising(self, t: int) -> bool:
         return t == 0 or (self.sync_period > 0 and t % self.sync_period == 0) or bool(self.sync(t))
 
-    @dg.output(shape=("nq",), depends=("integrated_q", "measured_q", "sync", "t"))
+    @dg.output(shape=("nq",), depends=("integrated_q", "measured_q", "sync", "t"), on_demand=("measured_q",))
     def q(self, t: int) -> np.ndarray:
         """The configuration the QP uses at ``t``."""
         return self.measured_q(t) if self._synchronising(t) else self.integrated_q(t)
 
-    @dg.output(shape=("nv",), depends=("integrated_v", "measured_v", "sync", "t"))
+    @dg.output(shape=("nv",), depends=("integrated_v", "measured_v", "sync", "t"), on_demand=("measured_v",))
     def v(self, t: int) -> np.ndarray:
         """The velocity the QP uses at ``t``."""
         return self.measured_v(t) if self._synchronising(t) else self.integrated_v(t)

@@ -96,7 +96,7 @@ class MinimumJerk(dg.Entity):
     def _out(self, value: Any) -> Any:
         return float(value) if self._scalar else value
 
-    @dg.output(shape=lambda self: self.value_shape, depends=("t", "current", "origin"))
+    @dg.output(shape=lambda self: self.value_shape, depends=("t", "current", "origin"), on_demand=("current",))
     def position(self, t: int) -> Any:
         """``p0 + (target - p0)(10 s^3 - 15 s^4 + 6 s^5)``."""
         if t < self.start_tick:
@@ -105,7 +105,7 @@ class MinimumJerk(dg.Entity):
         p0 = np.asarray(self._p0(t), dtype=float)
         return self._out(p0 + (self.target - p0) * (s**3 * (10.0 - 15.0 * s + 6.0 * s * s)))
 
-    @dg.output(shape=lambda self: self.value_shape, depends=("t", "current", "origin"))
+    @dg.output(shape=lambda self: self.value_shape, depends=("t", "current", "origin"), on_demand=("current",))
     def velocity(self, t: int) -> Any:
         """``(target - p0) / T (30 s^2 - 60 s^3 + 30 s^4)``."""
         if t < self.start_tick:
@@ -114,7 +114,7 @@ class MinimumJerk(dg.Entity):
         p0 = np.asarray(self._p0(t), dtype=float)
         return self._out((self.target - p0) / self.duration * (30.0 * s * s * (1.0 - s) ** 2))
 
-    @dg.output(shape=lambda self: self.value_shape, depends=("t", "current", "origin"))
+    @dg.output(shape=lambda self: self.value_shape, depends=("t", "current", "origin"), on_demand=("current",))
     def acceleration(self, t: int) -> Any:
         """``(target - p0) / T^2 (60 s - 180 s^2 + 120 s^3)``."""
         if t < self.start_tick:

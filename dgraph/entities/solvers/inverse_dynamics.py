@@ -16,6 +16,7 @@ from dgraph.entities.solvers.inverse_dynamics_qp import (
     InverseDynamicsQP,
     Passivity,
     QPSolution,
+    TaskRowsError,
 )
 from dgraph.entities.tasks.equation import TaskEquation
 
@@ -121,12 +122,14 @@ class InverseDynamicsSolver(dg.Entity):
                                f"{type(value).__name__}", entity=self.name, signal=inp.name)
         return value
 
-    def _bad_equations(self, tasks: list[TaskEquation], t: int, cause: ValueError) -> dg.SpecError:
+    def _bad_equation(self, tasks: list[TaskEquation], t: int, cause: TaskRowsError) -> dg.SpecError:
         """The error naming the task input whose equation did not fit its block of the QP."""
-        for inp, equation in zip(self._task_inputs, tasks, strict=True):
-            self._check_equation(inp.name, equation, t)
-        return dg.SpecError(f"{self.name} at tick {t}: the task equations do not fit the QP: {cause}",
-                            entity=self.name)
+        name = self._task_inputs[cause.index].name
+        try:
+            self._check_equation(name, tasks[cause.index], t)
+        except dg.SpecError as exc:
+            return exc
+        return dg.SpecError(f"{self.name}.{name} at tick {t}: {cause}", entity=self.name, signal=name)
 
     def _check_equation(self, name: str, equation: TaskEquation, t: int) -> None:
         """``A`` (m x nv), ``b`` (m), ``w`` (m) >= 0, or a ``SpecError`` naming the input."""
@@ -169,8 +172,8 @@ class InverseDynamicsSolver(dg.Entity):
             passivity = Passivity(passivity.scale, None, passivity.velocity)
         try:  # a task whose rows do not fit its block (shape, negative weights) is named here
             solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, active_contacts, t, passivity)
-        except ValueError as exc:
-            raise self._bad_equations(tasks, t, exc) from None
+        except TaskRowsError as exc:
+            raise self._bad_equation(tasks, t, exc) from exc
         if solution.status != SOLVED and passivity is not None and passivity.power_bound is not None:
             relax = True
             relaxed = Passivity(passivity.scale, None, passivity.velocity)

@@ -54,11 +54,12 @@ POWER_TOLERANCE = 1e-9
 """W: a passivity bound this close to what the velocity allows counts as met (rounding noise)."""
 PROXIMAL_RHO = 1e-8
 """ProxQP's proximal parameter on the primal variables (its default is 1e-6): on recorded TALOS
-ticks 1e-8 takes 1.3 iterations instead of 2.0 at eps_abs 1e-6 and lands ~100 times closer to
-the exact optimum (``bench/qp_tolerance.py``)."""
+sway ticks at eps_abs 1e-6 it takes 1.5 iterations instead of 2.0 and lands ~60 times closer to
+the exact optimum (``bench/qp_tolerance.py``, docs/benchmarks.md)."""
 DEFAULT_EPS_ABS = 1e-6
-"""ProxQP's absolute tolerance: on recorded TALOS ticks it changes ``tau`` by at most ~1e-2 N m
-against 1e-9, with half the iterations (``bench/qp_tolerance.py``, docs/benchmarks.md)."""
+"""ProxQP's absolute tolerance: with ``PROXIMAL_RHO``, on recorded TALOS sway ticks ``tau`` is
+within ~5e-5 N m of the exact optimum (1e-9: 5e-8 N m, with 1.5x the iterations); from a cold
+start within 0.1 N m (``bench/qp_tolerance.py``, docs/benchmarks.md)."""
 
 SOLVED, MAX_ITERATIONS, PRIMAL_INFEASIBLE, DUAL_INFEASIBLE, NOT_FINITE, NOT_SOLVED = range(6)
 STATUS_NAMES = ("solved", "max_iterations", "primal_infeasible", "dual_infeasible", "not_finite", "not_solved")
@@ -124,11 +125,12 @@ class WarmStartedQP:
 
     Warm-started from the solution of the latest earlier tick, with the preconditioner of its
     first solve (the problem's scaling hardly changes between ticks; recomputing it doubles the
-    solve time). Solving again at the same tick (a graph with its cache off) starts from the
-    same guess: ProxQP then gives the same answer bit for bit. After a failure the next solve
-    starts cold, with a new preconditioner (never from a failed iterate). ProxQP's proximal
-    parameter is ``rho`` (``PROXIMAL_RHO``). Inequality rows and bounds that did not change since
-    the last solve are not handed over again.
+    solve time). Solving again at the same tick (a graph with its cache off) repeats the tick's
+    first solve exactly: the same guess, and a new preconditioner again if that one started
+    cold, so ProxQP gives the same answer bit for bit. After a failure the next solve starts
+    cold, with a new preconditioner (never from a failed iterate). ProxQP's proximal parameter
+    is ``rho`` (``PROXIMAL_RHO``). With ``same_inequalities`` the inequality rows and bounds are
+    not handed over again (the caller knows they did not change since the last solve).
     """
 
     def __init__(self, n: int, n_eq: int, n_in: int, eps_abs: float, max_iterations: int,
@@ -141,12 +143,12 @@ class WarmStartedQP:
         qp.settings.default_rho = rho
         self.qp = qp
         self.initialised = False
-        self.inequalities_changed = True  # C, lower or upper changed since the last solve
         self.has_solution = False  # the latest buffers hold a solution
         self.latest = (np.zeros(n), np.zeros(n_eq), np.zeros(n_in))
         self.guess = (np.zeros(n), np.zeros(n_eq), np.zeros(n_in))
         self.guess_tick: int | None = None
         self.has_guess = False
+        self.cold_tick: int | None = None  # the tick of the last init (a cold start)
 
     def _prepare_guess(self, tick: int | None, start: tuple[np.ndarray, ...] | None) -> None:
         """This tick's guess: ``start`` if given, else the latest solution of an earlier tick
@@ -164,20 +166,20 @@ class WarmStartedQP:
             if self.has_solution:
                 self.guess, self.latest = self.latest, self.guess
 
-    def solve(self, problem: tuple[np.ndarray, ...], tick: int | None,
-              start: tuple[np.ndarray, ...] | None = None) -> tuple[int, int]:
+    def solve(self, problem: tuple[np.ndarray, ...], tick: int | None, start: tuple[np.ndarray, ...] | None = None,
+              same_inequalities: bool = False) -> tuple[int, int]:
         """ProxQP on ``problem`` = ``(H, g, A, b, C, lower, upper)``: ``(status, iterations)``; a
         solution lands in :attr:`latest`. ``start`` = ``(x, y, z)`` replaces the warm start (``z``
         may be shorter than this problem's: a solution without its last rows)."""
         self._prepare_guess(tick, start)
         qp = self.qp
-        if self.initialised and not self.inequalities_changed:
-            qp.update(*problem[:4], None, None, None, update_preconditioner=False)
-        elif self.initialised:
-            qp.update(*problem, update_preconditioner=False)
-        else:
+        if not self.initialised or (tick is not None and tick == self.cold_tick):
             qp.init(*problem)
-            self.initialised = True
+            self.initialised, self.cold_tick = True, tick
+        elif same_inequalities:
+            qp.update(*problem[:4], None, None, None, update_preconditioner=False)
+        else:
+            qp.update(*problem, update_preconditioner=False)
         if self.has_guess:
             qp.solve(*self.guess)
         else:
@@ -195,8 +197,15 @@ class WarmStartedQP:
         self.has_solution = status == SOLVED
         if not self.has_solution:
             self.initialised = False
-        self.inequalities_changed = False
         return status, int(info.iter)
+
+
+class TaskRowsError(ValueError):
+    """A task's equation does not fit its block of rows (``index``: its place in the task list)."""
+
+    def __init__(self, index: int, message: str):
+        super().__init__(message)
+        self.index = index
 
 
 class TaskRows:
@@ -214,6 +223,7 @@ class TaskRows:
     def __init__(self, sizes: tuple[int, ...], steady: tuple[bool, ...], nv: int):
         order = [i for i in range(len(sizes)) if not steady[i]] + [i for i in range(len(sizes)) if steady[i]]
         self.blocks: list[slice] = [slice(0, 0)] * len(sizes)
+        self._shapes = [(size, nv) for size in sizes]
         start = 0
         for i in order:
             self.blocks[i] = slice(start, start + sizes[i])
@@ -232,31 +242,35 @@ class TaskRows:
         self._weights: list[object] = [None] * len(sizes)
         self._steady_stale = True
 
-    def write(self, tasks: list[TaskEquation]) -> bool:
+    def write(self, tasks: list[TaskEquation]) -> None:
         """Copy every task's rows into its block (a matrix or weights only when they are other
-        arrays than the ones written); False if a task's weights are negative."""
+        arrays than the ones written, and checked then); :class:`TaskRowsError` for a task whose
+        arrays do not have the block's shape (nothing is broadcast) or whose weights are negative."""
         matrix, vector, weight, matrices, weights = self.matrix, self.vector, self.weight, self._matrices, self._weights
         reweighted = False
-        for index, (task, block) in enumerate(zip(tasks, self.blocks, strict=True)):
+        for index, (task, block, shape) in enumerate(zip(tasks, self.blocks, self._shapes, strict=True)):
+            if task.vector.shape != shape[:1]:
+                raise TaskRowsError(index, f"a vector of shape {task.vector.shape}, its block has {shape[0]} rows")
             vector[block] = task.vector
             if task.matrix is not matrices[index]:
+                if task.matrix.shape != shape:
+                    raise TaskRowsError(index, f"a matrix of shape {task.matrix.shape}, its block is {shape}")
                 matrix[block] = task.matrix
                 matrices[index] = task.matrix
                 self._steady_stale |= self._is_steady[index]
             if task.weight is not weights[index]:
+                if task.weight.shape != shape[:1] or (task.weight < 0.0).any():
+                    weights[index] = None
+                    raise TaskRowsError(index, f"weights of shape {task.weight.shape}, negative or not one per row")
                 weight[block] = task.weight
                 weights[index] = task.weight
                 reweighted = True
         if reweighted:
-            if (weight < 0.0).any():
-                self._weights = [None] * len(self.blocks)
-                return False
             np.multiply(weight, 2.0, out=self.root)
             np.sqrt(self.root, out=self.root)
             np.negative(self.root, out=self.negative_root)
             self.root_rows[...] = self.root[:, None]  # a product with it needs no broadcast buffer
             self._steady_stale = True
-        return True
 
     def cost(self, scale: float, regularisation: np.ndarray, hessian: np.ndarray, gradient: np.ndarray) -> None:
         """``hessian = (R A)^T (R A) + regularisation`` and ``gradient = -(R A)^T (s R b)``, into
@@ -370,6 +384,7 @@ class Workspace:
                                self.upper[:n_free])
         self.free = WarmStartedQP(n, n_eq, n_free, qp.eps_abs, qp.max_iterations, qp.rho)
         self.limited: WarmStartedQP | None = None  # made at the first tick a torque limit binds
+        self.free_rows_changed = True  # the rows without the torque limits changed since the free solve
         column, row, friction_row = nv, nu, 0
         self.blocks: list[_ContactBlock] = []
         for contact in contacts:
@@ -415,26 +430,18 @@ class InverseDynamicsQP:
         self.eps_abs, self.max_iterations, self.rho = eps_abs, max_iterations, rho
         self.acceleration_weight = acceleration_weight
         self._workspaces: dict[tuple[object, ...], Workspace] = {}
-        self._last_workspace: tuple[bool, list[tuple[str, int]], Workspace] | None = None
         self._task_rows: dict[tuple[tuple[int, ...], tuple[bool, ...]], TaskRows] = {}
         self._previous_tasks: list[tuple[object, object]] = []  # each task's matrix and weights at the last tick
         self._steady: tuple[bool, ...] = ()
         self._tasks_tick: int | None = None
-        self._passivity_row = np.zeros(0)
 
     # -- assembly ----------------------------------------------------------------------------
     def workspace(self, contacts: list[ContactConstraint], passivity_row: bool) -> Workspace:
-        """The workspace of this set of active contacts (by name and size; the same set as at
-        the previous call is recognised by names and motion rows alone)."""
-        names = [(c.name, len(c.motion_rhs)) for c in contacts]
-        last = self._last_workspace
-        if last is not None and last[0] == passivity_row and last[1] == names:
-            return last[2]
+        """The workspace of this set of active contacts (by name and size)."""
         key = (passivity_row, *((c.name, c.n_forces, len(c.friction_lower), len(c.motion_rhs)) for c in contacts))
         ws = self._workspaces.get(key)
         if ws is None:
             ws = self._workspaces[key] = Workspace(self, contacts, passivity_row)
-        self._last_workspace = (passivity_row, names, ws)
         return ws
 
     def task_rows(self, tasks: list[TaskEquation], tick: int | None = None) -> TaskRows:
@@ -458,15 +465,14 @@ class InverseDynamicsQP:
                  contacts: list[ContactConstraint], passivity: Passivity | None = None,
                  tick: int | None = None, torque_bounds: bool = True) -> Workspace:
         """Fill the workspace for this tick's problem (see the module docstring); a task whose
-        rows do not fit its block, or whose weights are negative, raises ``ValueError``.
+        rows do not fit its block, or whose weights are negative, raises :class:`TaskRowsError`.
         ``torque_bounds=False`` leaves the bounds of the torque rows (:meth:`write_torque_bounds`)
         for the ticks that need them."""
         scale = 1.0 if passivity is None else passivity.scale
         bounded = passivity is not None and passivity.power_bound is not None
         ws = self.workspace(contacts, bounded)
         rows = self.task_rows(tasks, tick)
-        if not rows.write(tasks):
-            raise ValueError("negative task weights (the cost would not be convex)")
+        rows.write(tasks)
         rows.cost(scale, self._regularisation, ws.hessian_block, ws.gradient_block)
         nu = self.nu
         ws.base_dynamics[...] = mass_matrix[:nu]  # dynamics (floating-base rows) and torque rows share [M, -J_c^T T]
@@ -476,16 +482,19 @@ class InverseDynamicsQP:
             self.write_torque_bounds(ws, bias_forces)
         for contact, block in zip(contacts, ws.blocks, strict=True):
             if block.write(contact, scale):
-                ws.free.inequalities_changed = True
+                ws.free_rows_changed = True
         if bounded:
             self._write_passivity_row(ws, passivity, bias_forces)
-            ws.free.inequalities_changed = True
+            ws.free_rows_changed = True
         return ws
 
     def write_torque_bounds(self, ws: Workspace, bias_forces: np.ndarray) -> None:
-        """``tau_min - h_j <= (torque rows) x <= tau_max - h_j``."""
+        """``tau_min - h_j <= (torque rows) x <= tau_max - h_j``, within ``+-INFINITY`` (ProxQP's
+        "no bound": a model without a limit on a joint). ``h_j`` must be finite."""
         np.subtract(self._negative_limit, bias_forces[self.nu:], out=ws.torque_lower)
         np.subtract(self.effort_limit, bias_forces[self.nu:], out=ws.torque_upper)
+        np.clip(ws.torque_lower, -INFINITY, INFINITY, out=ws.torque_lower)
+        np.clip(ws.torque_upper, -INFINITY, INFINITY, out=ws.torque_upper)
 
     def _write_passivity_row(self, ws: Workspace, passivity: Passivity, bias_forces: np.ndarray) -> None:
         """``-v_j^T tau >= H_dot`` with ``tau = (torque rows) x + h_j``, divided by the row's norm
@@ -518,7 +527,8 @@ class InverseDynamicsQP:
         ws = self.assemble(mass_matrix, bias_forces, tasks, contacts, passivity, tick, torque_bounds=False)
         if not self._finite(ws):  # h_j, which only the torques and their bounds see, is checked with the torques
             return self._failed(NOT_FINITE, 0, contacts, start)
-        status, iterations = ws.free.solve(ws.without_limits, tick)
+        status, iterations = ws.free.solve(ws.without_limits, tick, same_inequalities=not ws.free_rows_changed)
+        ws.free_rows_changed = False
         limited = False
         if status == SOLVED:
             tau = self._torques(ws, ws.free.latest[0], bias_forces)
@@ -561,13 +571,13 @@ class InverseDynamicsQP:
         return float(_largest(excess))
 
     def _solve_with_limits(self, ws: Workspace, bias_forces: np.ndarray, tick: int | None) -> tuple[int, int]:
-        """The QP with its torque rows, from this tick's answer without them."""
-        self.write_torque_bounds(ws, bias_forces)
-        if not math.isfinite(np.vdot(ws.torque_upper, ws.torque_upper)):
+        """The QP with its torque rows, from this tick's answer without them (not written at all
+        when ``h_j`` is not finite: bounds of inf in the buffer would fail every later tick)."""
+        bias = bias_forces[self.nu:]
+        if not math.isfinite(np.vdot(bias, bias)):
             return NOT_FINITE, 0
-        qp = ws.limited_qp(self)
-        qp.inequalities_changed = True  # the torque rows change every tick
-        return qp.solve(ws.full, tick, start=ws.free.latest)
+        self.write_torque_bounds(ws, bias_forces)
+        return ws.limited_qp(self).solve(ws.full, tick, start=ws.free.latest)
 
     def _failed(self, status: int, iterations: int, contacts: list[ContactConstraint], start: float) -> QPSolution:
         return QPSolution(np.zeros(self.nv), None, [np.zeros(c.n_forces) for c in contacts], status, iterations,

@@ -52,7 +52,8 @@ class ForceTask(dg.Entity):
         """``e_f = F* - F_ext``."""
         return self.reference(t) - self.measured(t)
 
-    @dg.output(shape=("size",), depends=("reference", "error", "p_gain", "i_gain", "active", "integral"))
+    @dg.output(shape=("size",), depends=("reference", "error", "p_gain", "i_gain", "active", "integral"),
+               on_demand=("error",))  # read only while active
     def force(self, t: int) -> np.ndarray:
         """``F* + P_F e_f + I_F integral(e_f)`` (``F*`` while inactive)."""
         if not self.active(t):
