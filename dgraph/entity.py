@@ -25,7 +25,7 @@ from typing import Any, ClassVar, TypeVar
 from dgraph.errors import DGraphError, ParamError
 from dgraph.params import REQUIRED, Param
 from dgraph.signals.clock import Clock
-from dgraph.signals.signal import Input, Output, Signal, State
+from dgraph.signals.signal import Input, Output, Signal, State, structure_changed
 
 F = TypeVar("F", bound=Callable[..., Any])
 NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_\-]*$")
@@ -189,6 +189,7 @@ class Entity:
                     sig._stale = True
                 clock.register(sig)
         self._clock = clock
+        structure_changed()  # the cached evaluation orders through it are out of date
 
     # -- tick transition (stateful entities) --------------------------------------------------
     def prepare_state(self, t: int) -> None:

@@ -33,6 +33,14 @@ _UNSET = object()
 _FLOAT64 = np.dtype(np.float64)
 _PLANS = itertools.count(1)
 """Numbers of evaluation plans: a plan marks the outputs it visits with its own number."""
+_STRUCTURE = [0]
+"""How many times a plug or an unplug changed the graphs' structure: a cached evaluation order
+(:meth:`Output._cached_order`) is valid while this number is the one it was made at."""
+
+
+def structure_changed() -> None:
+    """Forget every cached evaluation order (a plug, an unplug, an entity changing clocks)."""
+    _STRUCTURE[0] += 1
 
 
 class Signal:
@@ -104,6 +112,8 @@ class Output(Signal):
         "_fn",
         "_held",
         "_mark",
+        "_order",
+        "_order_version",
         "_plugged",
         "_stale",
         "_time",
@@ -145,6 +155,8 @@ class Output(Signal):
         self._unguarded: Callable[..., Any] | None = None
         self._upstream: list[Output] | None = None
         self._mark = 0
+        self._order: list[Output] | None = None
+        self._order_version = -1
 
     def bind(self, entity: Entity, name: str) -> Output:
         """Return this template's copy for ``entity`` (called by :class:`~dgraph.Entity`)."""
@@ -168,20 +180,58 @@ class Output(Signal):
 
     def _evaluate(self, t: int, force: bool = False) -> Any:
         """Bring this stale output up to date at ``t``: first every stale output it needs, in
-        dependency order (:meth:`_stale_upstream`), so that its method finds its inputs fresh and
-        the Python stack stays flat whatever the graph's depth; then itself. A periodic output
+        dependency order, so that its method finds its inputs fresh and the Python stack stays
+        flat whatever the graph's depth; then itself. The order is the one cached from the
+        graph's structure (:meth:`_cached_order`) or, where the upstream has periodic outputs or
+        outputs on another clock, found at each read (:meth:`_stale_upstream`). A periodic output
         already sampled in this window holds, unless ``force``."""
         if self.period > 1 and not force and self._holds(t):
             return self._hold()
         if self._clock.cache_enabled:  # with the cache off every read recomputes: nothing to prepare
-            upstream = self._upstream if self._upstream is not None else self._upstream_outputs()
-            for up in upstream:
-                if up._stale:  # something to prepare (the common case, fresh inputs, skips the search)
-                    for node in self._stale_upstream(t):
-                        if node._stale:  # an on-demand read in an earlier method may have computed it
-                            node._compute(t)
-                    break
+            order = self._order if self._order_version == _STRUCTURE[0] else self._cached_order()
+            if order is not None:
+                for node in order:
+                    if node._stale:  # fresh: so is everything it reads
+                        node._compute(t)
+            else:
+                upstream = self._upstream if self._upstream is not None else self._upstream_outputs()
+                for up in upstream:
+                    if up._stale:  # something to prepare (the common case, fresh inputs, skips the search)
+                        for node in self._stale_upstream(t):
+                            if node._stale:  # an on-demand read in an earlier method may have computed it
+                                node._compute(t)
+                        break
         return self._compute(t)
+
+    def _cached_order(self) -> list[Output] | None:
+        """Every output this one reads ahead of its method, directly or not, each after what it
+        reads (a depth-first search without recursion), kept until a plug or an unplug; None if
+        one of them is periodic or on another clock (their holds and clocks decide at each read
+        what is needed). Computing the stale ones in this order computes what the search of
+        :meth:`_stale_upstream` finds: a fresh output's upstream is fresh (invalidation reaches
+        everything downstream), so a stale output in the order is needed."""
+        mark = self._mark = next(_PLANS)
+        clock = self._clock
+        order: list[Output] | None = []
+        stack = [(self, iter(self._upstream_outputs()))]
+        while stack:
+            node, pending = stack[-1]
+            for up in pending:
+                if up._mark != mark:
+                    if up.period > 1 or up._clock is not clock:
+                        order = None
+                        stack.clear()
+                        break
+                    up._mark = mark
+                    stack.append((up, iter(up._upstream_outputs())))
+                    break
+            else:
+                stack.pop()
+                order.append(node)
+        if order is not None:
+            order.pop()  # this output itself, computed by the caller
+        self._order, self._order_version = order, _STRUCTURE[0]
+        return order
 
     def _holds(self, t: int) -> bool:
         """A periodic output whose value was sampled in the window of ``t`` (it serves its hold)."""
@@ -564,6 +614,7 @@ class Input(Signal):
         """The outputs reading this input list their upstream again at their next evaluation."""
         for sub in self._subs:
             sub._upstream = None
+        structure_changed()
 
     @property
     def source(self) -> Output | None:

@@ -461,6 +461,24 @@ def test_each_stale_output_is_computed_after_everything_it_reads(graph):
         graph.step()
 
 
+def test_the_cached_evaluation_order_follows_a_replug(graph):
+    graph.add(Ticker("dev"))
+    old, new, _middle, end = graph.add(Scale("old"), Scale("new"), Scale("middle"), Scale("end"))
+    graph.plug("dev.x", "old.u")
+    graph.plug("dev.x", "new.u")
+    graph.plug("old.y", "middle.u")
+    graph.plug("middle.y", "end.u")
+    for _ in range(3):
+        assert end.y(graph.t) == 8.0 * graph.t
+        graph.step()
+    graph.plug("new.y", "middle.u")  # upstream of the cached order of end.y, two levels up
+    new.u.set(5.0)
+    for _ in range(3):
+        assert end.y(graph.t) == 40.0
+        graph.step()
+    assert (old.y.count, new.y.count, end.y.count) == (3, 1, 4)  # the old branch is left out, the new is constant
+
+
 def test_on_demand_dependencies_are_computed_only_when_read(graph):
     from dgraph.entities.operators import Switch
 
