@@ -13,7 +13,9 @@ Each tick k (t = k * dt, k = 0 at the first warm-up tick):
   2. ``HQPData = formulation.computeProblemData(t, q, v)``          -> problem_data_us
   3. ``sol = solver.solve(HQPData)``                                -> solve_us
   4. ``tau = formulation.getActuatorForces(sol)``, ``dv = formulation.getAccelerations(sol)``
-  5. semi-implicit Euler, no simulator: ``v += dv dt; q = pin.integrate(model, q, v dt)``.
+  5. the next state: with a ``simulator`` in the config, the MuJoCo closed loop dgraph's tick is
+     measured in (``ctrl = tau``, ``mj_step``, ``q, v`` read back from ``qpos, qvel``); without,
+     semi-implicit Euler: ``v += dv dt; q = pin.integrate(model, q, v dt)``.
 ``tick_us`` = (2) + (3); ``loop_us`` = (1) to (5). Only the ``ticks`` ticks after ``warmup`` count.
 Timing is ``time.perf_counter_ns``. A tick fails when ``sol.status != 0``; the loop then keeps
 the previous dv and tau.
@@ -50,13 +52,19 @@ Units: SI (m, N, s, rad); gains in 1/s^2 (kp) and 1/s (kd); ``kd: null`` means 2
   frames                            list of extra TaskSE3Equality tasks, level 1, each
                                     {name, frame, mask, weight, kp, kd, local_frame}, reference =
                                     the frame's initial pose (default: none)
+  simulator                         null (semi-implicit Euler) or {model: path of a MuJoCo binary
+                                    model (mj_saveModel; needs the same mujoco version), q0: start
+                                    configuration (Pinocchio order), qpos_index, qvel_index,
+                                    ctrl_index, free_qpos, free_dof: the maps of dgraph's
+                                    sim.conventions.JointMap}
 
 Output keys: versions{tsid,libtsid,pinocchio,eigenpy,numpy,python}, solver, threads_env (the
 OMP/OpenBLAS/MKL thread variables it ran with), model{nq,nv,na,
 mass_kg,armature}, nVar, nEq, nIn, tasks (names), ticks, warmup, dt,
 problem_data_us/solve_us/tick_us/loop_us as {median,p90,p99,mean,min,max}, failures,
 com_error_final_m, com_error_max_m, com_error_rms_m (|com - ref| over the counted ticks),
-mean_sum_fz_N, m_g_N, fz_ratio, tau_max_abs_Nm, config (the effective one).
+mean_sum_fz_N, m_g_N, fz_ratio, tau_max_abs_Nm, base_height_min_m, loop ("mujoco" or
+"euler"), config (the effective one).
 """
 
 from __future__ import annotations
@@ -114,6 +122,7 @@ DEFAULT_CONFIG: dict = {
     },
     "momentum": {"enabled": False, "weight": 0.02, "kp": 10.0, "kd": 0.0},
     "frames": [],
+    "simulator": None,
 }
 
 SOLVERS = {"HQuadProgFast": tsid.SolverHQuadProgFast, "HQuadProg": tsid.SolverHQuadProg}
@@ -191,6 +200,40 @@ def stats(values_ns: list[int]) -> dict[str, float]:
             "min": float(us.min()), "max": float(us.max())}
 
 
+class Simulator:
+    """The MuJoCo closed loop of the config's ``simulator`` entry: the torques go to ``ctrl``, one
+    ``mj_step`` per tick, and ``(q, v)`` come back in Pinocchio's conventions (``qpos`` and
+    ``qvel`` permuted, the base's linear velocity turned from the world frame to the base frame)."""
+
+    def __init__(self, spec: dict):
+        import mujoco
+
+        self.mujoco = mujoco
+        self.model = mujoco.MjModel.from_binary_path(spec["model"])
+        self.data = mujoco.MjData(self.model)
+        self.qpos_index, self.qvel_index, self.ctrl_index = (np.array(spec[key], dtype=np.intp) for key in (
+            "qpos_index", "qvel_index", "ctrl_index"))
+        self.base_quat = slice(int(spec["free_qpos"]) + 3, int(spec["free_qpos"]) + 7)
+        self.data.qpos[self.qpos_index] = spec["q0"]
+        mujoco.mj_forward(self.model, self.data)
+        self._conjugate, self._linear = np.zeros(4), np.zeros(3)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, v)`` of the simulated robot."""
+        d, mujoco = self.data, self.mujoco
+        q, v = d.qpos[self.qpos_index], d.qvel[self.qvel_index]
+        mujoco.mju_negQuat(self._conjugate, d.qpos[self.base_quat])
+        mujoco.mju_rotVecQuat(self._linear, v[:3].copy(), self._conjugate)
+        v[:3] = self._linear
+        return q, v
+
+    def step(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Apply ``tau`` (actuated order) for one step; the new ``(q, v)``."""
+        self.data.ctrl[:] = tau[self.ctrl_index]
+        self.mujoco.mj_step(self.model, self.data)
+        return self.state()
+
+
 def run(cfg: dict) -> dict:
     model = erd.load("talos").model
     if cfg["armature"] is not None:
@@ -198,8 +241,12 @@ def run(cfg: dict) -> dict:
     robot = tsid.RobotWrapper(model, tsid.FLOATING_BASE_SYSTEM, False)
     model = robot.model()
     na, dt = robot.na, float(cfg["dt"])
-    q = np.array(model.referenceConfigurations[cfg["reference_posture"]], dtype=float)
-    v = np.zeros(robot.nv)
+    simulator = Simulator(cfg["simulator"]) if cfg["simulator"] else None
+    if simulator is None:
+        q = np.array(model.referenceConfigurations[cfg["reference_posture"]], dtype=float)
+        v = np.zeros(robot.nv)
+    else:
+        q, v = simulator.state()
 
     formulation = tsid.InverseDynamicsFormulationAccForce("tsid", robot, False)
     formulation.computeProblemData(0.0, q, v)
@@ -274,6 +321,7 @@ def run(cfg: dict) -> dict:
     dv = np.zeros(robot.nv)
     tau = np.zeros(na)
     tau_max = 0.0
+    base_height_min = math.inf
     clock = time.perf_counter_ns
     integrate = pin.integrate
     for k in range(warmup + ticks):
@@ -294,8 +342,12 @@ def run(cfg: dict) -> dict:
         if sol.status == 0:
             tau = formulation.getActuatorForces(sol)
             dv = formulation.getAccelerations(sol)
-        v += dv * dt
-        q_tick, q = q, integrate(model, q, v * dt)
+        q_tick = q
+        if simulator is None:
+            v += dv * dt
+            q = integrate(model, q, v * dt)
+        else:
+            q, v = simulator.step(tau)
         t4 = clock()
         if k < warmup:
             continue
@@ -305,6 +357,7 @@ def run(cfg: dict) -> dict:
         t_loop.append(t4 - t0)
         # Outside the timed part: the CoM at the q given to computeProblemData at time t.
         com_err.append(float(np.linalg.norm(pin.centerOfMass(model, com_data, q_tick) - ref)))
+        base_height_min = min(base_height_min, float(q_tick[2]))
         if sol.status == 0:
             sum_fz.append(sum(ct.getNormalForce(formulation.getContactForce(ct.name, sol))
                               for ct in contacts))
@@ -332,6 +385,8 @@ def run(cfg: dict) -> dict:
         "com_error_rms_m": float(np.sqrt(np.mean(err**2))),
         "mean_sum_fz_N": mean_fz, "m_g_N": mg, "fz_ratio": mean_fz / mg,
         "tau_max_abs_Nm": tau_max,
+        "base_height_min_m": base_height_min,
+        "loop": "euler" if simulator is None else "mujoco",
         "config": cfg,
     }
 
