@@ -6,8 +6,10 @@
    of ``--ticks`` ticks after ``--warmup`` ticks, copy the solver's inputs: the robot state's mass
    matrix and bias forces, the task equations and the active contacts.
 2. Replay the recorded problems through three formulations, each with one ProxQP dense object
-   reused and warm-started from the previous result (``WARM_START_WITH_PREVIOUS_RESULT``,
-   eps_abs 1e-9, eps_rel 0, max_iter 1000: the library's settings):
+   reused, with the library's tolerance and proximal parameter (``DEFAULT_EPS_ABS`` 1e-6,
+   ``PROXIMAL_RHO`` 1e-8; eps_rel 0, max_iter 1000); the library warm-starts from the previous
+   tick's answer as in the loop, the explicit variants from the previous result
+   (``WARM_START_WITH_PREVIOUS_RESULT``):
 
    * ``eliminated``: :class:`InverseDynamicsQP` (x = [a, f]; floating-base dynamics and contact
      rows as equalities; friction rows and torque limits as inequalities; tau = M_j a + h_j -
@@ -57,10 +59,15 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "graphs"))
 
 from dgraph.entities.contacts.constraint import ContactConstraint  # noqa: E402
-from dgraph.entities.solvers.inverse_dynamics_qp import INFINITY, InverseDynamicsQP  # noqa: E402
+from dgraph.entities.solvers.inverse_dynamics_qp import (  # noqa: E402
+    DEFAULT_EPS_ABS,
+    INFINITY,
+    PROXIMAL_RHO,
+    InverseDynamicsQP,
+)
 from dgraph.entities.tasks.equation import TaskEquation  # noqa: E402
 
-EPS_ABS = 1e-9
+EPS_ABS = DEFAULT_EPS_ABS
 MAX_ITERATIONS = 1000
 
 
@@ -120,6 +127,7 @@ def _new_qp(n: int, n_eq: int, n_in: int, box: bool = False):
     qp.settings.eps_abs = EPS_ABS
     qp.settings.eps_rel = 0.0
     qp.settings.max_iter = MAX_ITERATIONS
+    qp.settings.default_rho = PROXIMAL_RHO
     # from the previous result: what the library does with an explicit guess when it solves once per tick
     qp.settings.initial_guess = proxsuite.proxqp.InitialGuess.WARM_START_WITH_PREVIOUS_RESULT
     return qp
@@ -414,7 +422,7 @@ def main() -> None:
     print(table(rows))
     print()
     print(f"- ProxQP dense, one object per variant, warm start from the previous result, preconditioner kept "
-          f"from the first solve (the library's settings), eps_abs {EPS_ABS:g}, "
+          f"from the first solve, the library's eps_abs {EPS_ABS:g} and rho {PROXIMAL_RHO:g}, "
           f"eps_rel 0, max_iter {MAX_ITERATIONS}; cold init outside the timing; variants interleaved per tick.")
     print(f"- cost: same task terms, acceleration_weight {info['acceleration_weight']:g}, same force weights; "
           f"explicit variants add tau_weight {args.tau_weight:g} * ||tau||^2.")
