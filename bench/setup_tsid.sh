@@ -5,12 +5,16 @@
 # libtsid 1.10.0 is on PyPI only as cp314 wheels although it is a plain C++ library, and its
 # sdist does not build on 3.11 without the Eigen/urdfdom headers. So we download the cp314
 # manylinux wheel and retag it py3-none (`wheel tags`) before installing it.
-# Idempotent: does nothing when `.venv-tsid/bin/python -c "import tsid"` already works.
+# mujoco (the version of pyproject.toml: the peer loads the binary model our side saves) runs
+# the peer in the same MuJoCo closed loop as our tick (bench/talos_tick.py).
+# Idempotent: does nothing when `.venv-tsid/bin/python -c "import tsid, mujoco"` already works.
 #
 #     bash bench/setup_tsid.sh && .venv-tsid/bin/python bench/peer_tsid.py --ticks 5000
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ -x .venv-tsid/bin/python ] && .venv-tsid/bin/python -c "import tsid" 2>/dev/null; then
+MUJOCO=$(sed -n 's/^ *"mujoco==\([0-9.]*\)".*/\1/p' pyproject.toml)
+if [ -x .venv-tsid/bin/python ] && .venv-tsid/bin/python -c "import tsid, mujoco; assert mujoco.__version__ == '${MUJOCO}'" \
+    2>/dev/null; then
   exit 0
 fi
 PIN=4.0.0
@@ -32,11 +36,12 @@ trap 'rm -rf "$tmp"' EXIT
 .venv-tsid/bin/wheel tags --python-tag py3 --abi-tag none "$tmp/${LIBTSID_WHL}"
 # Re-pin pin: tsid declares an unpinned `pin` requirement, and 4.1.0 breaks its ABI.
 .venv-tsid/bin/pip install --quiet "$tmp/libtsid-${TSID}-0-py3-none-manylinux_2_28_x86_64.whl" \
-  "tsid==${TSID}" "pin==${PIN}"
+  "tsid==${TSID}" "pin==${PIN}" "mujoco==${MUJOCO}"
 .venv-tsid/bin/python - <<EOF
 import warnings
 warnings.simplefilter("ignore", RuntimeWarning)
-import pinocchio, tsid
+import mujoco, pinocchio, tsid
 assert pinocchio.__version__ == "${PIN}", pinocchio.__version__
+assert mujoco.__version__ == "${MUJOCO}", mujoco.__version__
 print("tsid", tsid.__version__ if hasattr(tsid, "__version__") else "${TSID}", "pinocchio", pinocchio.__version__)
 EOF
