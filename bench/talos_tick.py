@@ -1,6 +1,6 @@
 """TALOS control tick: dgraph's inverse-dynamics graph against TSID 1.10, in the same run.
 
-    bash bench/setup_tsid.sh            # once: the TSID peer's own venv (.venv-tsid, pin 4.0.0)
+    bash bench/setup_tsid.sh            # once: the TSID peer's own venv (.venv-tsid, pin 4.0.0, mujoco)
     .venv/bin/python bench/talos_tick.py [--ticks 3000] [--rounds 3] [--sets bench demo demo+4]
                                          [--json out/talos_tick.json] [--base ddec0a5]
 
