@@ -20,8 +20,6 @@ import time as _time
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from dgraph.errors import ComputeError, DGraphError, PlugError, SpecError, UnpluggedInputError
 from dgraph.signals.clock import Clock
 from dgraph.signals.spec import ShapeDecl, Spec, exact_float_copy, resolve_shape
@@ -30,7 +28,6 @@ if TYPE_CHECKING:
     from dgraph.entity import Entity
 
 _UNSET = object()
-_FLOAT64 = np.dtype(np.float64)
 _PLANS = itertools.count(1)
 """Numbers of evaluation plans: a plan marks the outputs it visits with its own number."""
 DENSE_FRACTION = 8
@@ -218,31 +215,15 @@ class Output(Signal):
 
     def _cached_order(self) -> list[Output] | None:
         """Every output this one reads ahead of its method, directly or not, each after what it
-        reads (a depth-first search without recursion), kept until a plug or an unplug; None if
+        reads (:meth:`_post_order` over all of them), kept until a plug or an unplug; None if
         one of them is periodic or on another clock (their holds and clocks decide at each read
         what is needed). Computing the stale ones in this order computes what the search of
         :meth:`_stale_upstream` finds: a fresh output's upstream is fresh (invalidation reaches
         everything downstream), so a stale output in the order is needed."""
-        mark = self._mark = next(_PLANS)
         clock = self._clock
-        order: list[Output] | None = []
-        stack = [(self, iter(self._upstream_outputs()))]
-        while stack:
-            node, pending = stack[-1]
-            for up in pending:
-                if up._mark != mark:
-                    if up.period > 1 or up._clock is not clock:
-                        order = None
-                        stack.clear()
-                        break
-                    up._mark = mark
-                    stack.append((up, iter(up._upstream_outputs())))
-                    break
-            else:
-                stack.pop()
-                order.append(node)
-        if order is not None:
-            order.pop()  # this output itself, computed by the caller
+        order: list[Output] | None = self._post_order(lambda up: True)
+        if any(node.period > 1 or node._clock is not clock for node in order):
+            order = None
         self._order, self._order_version = order, _STRUCTURE[0]
         return order
 
@@ -252,19 +233,25 @@ class Output(Signal):
 
     def _stale_upstream(self, t: int) -> list[Output]:
         """The stale outputs this one reads, directly or not, in dependency order (each after
-        everything it reads): an iterative depth-first search that stops at fresh outputs, at
-        States, at periodic outputs that hold, and at on-demand dependencies. Its cost is the
-        number of stale outputs found, not the size of the graph. An output on another clock (an
-        entity outside this graph, plugged by hand) is left to its reader: read through the
-        input, it moves its own clock to ``t`` first."""
-        mark = self._mark = next(_PLANS)
+        everything it reads): :meth:`_post_order` stopping at fresh outputs, at States, at
+        periodic outputs that hold, and at on-demand dependencies. Its cost is the number of
+        stale outputs found, not the size of the graph. An output on another clock (an entity
+        outside this graph, plugged by hand) is left to its reader: read through the input, it
+        moves its own clock to ``t`` first."""
         clock = self._clock
+        return self._post_order(lambda up: up._stale and up._clock is clock and not (up.period > 1 and up._holds(t)))
+
+    def _post_order(self, follow: Callable[[Output], bool]) -> list[Output]:
+        """The outputs upstream of this one (through :meth:`_upstream_outputs`) that ``follow``
+        admits, each after those it reads: an iterative depth-first search (no recursion, any
+        depth), each output visited once; this output itself is not in the list."""
+        mark = self._mark = next(_PLANS)
         order: list[Output] = []
         stack = [(self, iter(self._upstream_outputs()))]
         while stack:
             node, pending = stack[-1]
             for up in pending:
-                if up._stale and up._mark != mark and up._clock is clock and not (up.period > 1 and up._holds(t)):
+                if up._mark != mark and follow(up):
                     up._mark = mark
                     stack.append((up, iter(up._upstream_outputs())))
                     break
@@ -463,16 +450,8 @@ class State(Output):
         NaN): for a caller that hands over an array of its own that it never writes again, such
         as the result of a gather (a device's sensors), it saves a copy per state per tick.
         """
-        spec = self.spec
-        if type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == spec.shape and \
-                spec.dtype == "float" and value.ndim:  # the common case, without a call
-            if copy:
-                value = value.copy()
-            total = np.vdot(value, value)  # NaN exactly when an entry is NaN (see spec._has_nan)
-            if total == total:
-                self._staged = value
-                return
-        self._staged = _coerce(self, value, copy)
+        array = exact_float_copy(self.spec, value, copy)  # the common case, before the general one
+        self._staged = array if array is not None else _coerce(self, value, copy)
 
     def commit(self, t: int) -> None:
         """Publish the staged value as the state at tick ``t``; invalidate everything downstream."""
