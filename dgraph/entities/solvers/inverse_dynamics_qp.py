@@ -185,19 +185,16 @@ class WarmStartedQP:
         else:
             qp.solve()
         results = qp.results
-        info = results.info
-        status = _PROXQP_STATUS.get(info.status.name, NOT_SOLVED)
+        status = proxqp_status(results)
         if status == SOLVED:
             x, y, z = self.latest
             np.copyto(x, results.x)  # ProxQP's arrays are views of its own memory
             np.copyto(y, results.y)
             np.copyto(z, results.z)
-            if not math.isfinite(np.vdot(x, x)):
-                status = NOT_FINITE
         self.has_solution = status == SOLVED
         if not self.has_solution:
             self.initialised = False
-        return status, int(info.iter)
+        return status, int(results.info.iter)
 
 
 class TaskRowsError(ValueError):
