@@ -59,10 +59,10 @@ def test_solution_matches_an_exact_solver_and_satisfies_the_dynamics(seed):
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_the_default_tolerance_moves_the_torques_by_less_than_a_tenth_of_a_newton_metre(seed):
-    """eps_abs = 1e-6, from a cold start (the worst case; warm-started ticks do ~10x better,
-    bench/qp_tolerance.py): accelerations to 1e-4, torques to 0.1 N m of the exact optimum, the
-    dynamics to 1e-6."""
+def test_the_default_tolerance_moves_the_torques_by_less_than_a_millinewton_metre(seed):
+    """eps_abs = 1e-6, from a cold start (a new set of contacts): accelerations to 1e-5, torques
+    to 1e-3 N m of the exact optimum (measured: at most 6e-7 and 6e-6 over these seeds; the
+    issue asks for 1e-2 N m), the dynamics to 1e-6."""
     q, v = perturbed_state(seed)
     graph = build(q, v)
     solver = graph["solver"]
@@ -70,8 +70,8 @@ def test_the_default_tolerance_moves_the_torques_by_less_than_a_tenth_of_a_newto
     x, workspace = exact_solution(graph)
     exact_tau = workspace.torque_rows @ x + graph["robot"].state(0).bias_forces[6:]
     assert solver.eps_abs == 1e-6 and solution.status == SOLVED
-    assert np.abs(solution.acceleration - x[:38]).max() < 1e-4
-    assert np.abs(solution.tau - exact_tau).max() < 0.1
+    assert np.abs(solution.acceleration - x[:38]).max() < 1e-5
+    assert np.abs(solution.tau - exact_tau).max() < 1e-3
     assert dynamics_residual(graph) < 1e-6
 
 

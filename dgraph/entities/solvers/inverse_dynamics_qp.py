@@ -54,12 +54,13 @@ POWER_TOLERANCE = 1e-9
 """W: a passivity bound this close to what the velocity allows counts as met (rounding noise)."""
 PROXIMAL_RHO = 1e-8
 """ProxQP's proximal parameter on the primal variables (its default is 1e-6): on recorded TALOS
-sway ticks at eps_abs 1e-6 it takes 1.5 iterations instead of 2.0 and lands ~60 times closer to
+sway ticks at eps_abs 1e-6 it takes 1.6 iterations instead of 2.0 and lands ~60 times closer to
 the exact optimum (``bench/qp_tolerance.py``, docs/benchmarks.md)."""
 DEFAULT_EPS_ABS = 1e-6
 """ProxQP's absolute tolerance: with ``PROXIMAL_RHO``, on recorded TALOS sway ticks ``tau`` is
-within ~5e-5 N m of the exact optimum (1e-9: 5e-8 N m, with 1.5x the iterations); from a cold
-start within 0.1 N m (``bench/qp_tolerance.py``, docs/benchmarks.md)."""
+within ~5e-5 N m of the exact optimum (1e-9: 2e-6 N m, with 1.3x the iterations); from a cold
+start within 1e-6 N m there, 1e-5 N m at perturbed states (``bench/qp_tolerance.py``,
+docs/benchmarks.md, ``tests/entities/test_inverse_dynamics.py``)."""
 
 SOLVED, MAX_ITERATIONS, PRIMAL_INFEASIBLE, DUAL_INFEASIBLE, NOT_FINITE, NOT_SOLVED = range(6)
 STATUS_NAMES = ("solved", "max_iterations", "primal_infeasible", "dual_infeasible", "not_finite", "not_solved")
