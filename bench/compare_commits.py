@@ -39,17 +39,29 @@ DRIVER = r"""
 import json, sys, tempfile, time
 import dgraph as dg
 ticks, warmup = int(sys.argv[1]), int(sys.argv[2])
+
+def profiled(graph, ticks):  # the timed ticks (bench/profile_shares.py counts the samples inside it)
+    start = time.perf_counter()
+    graph.run(ticks=ticks, progress=False)
+    return time.perf_counter() - start
+
 with tempfile.TemporaryDirectory() as tmp:
     rrd = f"{tmp}/talos_sway.rrd"
     graph = dg.load("graphs/talos_sway.yaml", {"recorder.rrd_path": rrd, "view.rrd_path": rrd})
     graph.run(ticks=warmup, progress=False)
+    loop = profiled(graph, ticks)
     start = time.perf_counter()
-    graph.run(ticks=ticks, progress=False)
-    graph.close()
-    wall = time.perf_counter() - start
-print(json.dumps({"real_time_factor": ticks * graph.dt / wall, "loop_us": wall / ticks * 1e6,
-                  "fallen": bool(graph["device"].fallen.value), "dgraph": dg.__file__}))
+    graph.close()  # flushes the recording: part of what a run costs
+    wall = loop + time.perf_counter() - start
+result = json.dumps({"real_time_factor": ticks * graph.dt / wall, "loop_us": wall / ticks * 1e6, "ticks": ticks,
+                     "profiled_s": loop, "fallen": bool(graph["device"].fallen.value), "dgraph": dg.__file__})
+if len(sys.argv) > 3:  # a file for the result (under py-spy)
+    with open(sys.argv[3], "w") as f:
+        f.write(result)
+print(result)
 """
+"""The demo run: ``python -c DRIVER TICKS WARMUP [RESULT_FILE]`` in a checkout; JSON on stdout (and
+into RESULT_FILE): real-time factor and loop time with the closing, the ticks' own wall time."""
 
 
 def git(*args: str) -> str:

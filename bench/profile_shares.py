@@ -44,6 +44,7 @@ from collections import Counter
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import compare_commits
 from calibration import calibrate, calibration_line, single_threaded_env
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,27 +58,6 @@ ENTITY_FAMILIES = {"features": TASK_SIDE, "tasks": TASK_SIDE, "contacts": TASK_S
 CATEGORIES = ("ProxQP (update + solve)", "QP assembly", "solver entity", "signal framework",
               TASK_SIDE, "estimator", "robot model", "MuJoCo step", "device (Python)",
               "recorder + Rerun", "loop / graph", "other entities", "outside the project")
-DRIVER = r"""
-import json, sys, tempfile, time
-import dgraph as dg
-ticks, warmup, result = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
-
-def profiled(graph, ticks):
-    start = time.perf_counter()
-    graph.run(ticks=ticks, progress=False)
-    return time.perf_counter() - start
-
-with tempfile.TemporaryDirectory() as tmp:
-    rrd = f"{tmp}/talos_sway.rrd"
-    graph = dg.load("graphs/talos_sway.yaml", {"recorder.rrd_path": rrd, "view.rrd_path": rrd})
-    graph.run(ticks=warmup, progress=False)
-    wall = profiled(graph, ticks)
-    graph.close()
-with open(result, "w") as f:
-    json.dump({"wall_s": wall, "ticks": ticks}, f)
-"""
-
-
 def py_spy() -> str:
     """The py-spy executable next to this python, or on PATH."""
     local = Path(sys.executable).with_name("py-spy")
@@ -93,7 +73,7 @@ def record(ticks: int, warmup: int, rate: int, raw: Path) -> dict[str, float]:
     env["PYTHONPATH"] = str(ROOT)
     result = raw.with_suffix(".timing.json")
     out = subprocess.run([py_spy(), "record", "-f", "raw", "-r", str(rate), "-o", str(raw), "--",
-                          sys.executable, "-c", DRIVER, str(ticks), str(warmup), str(result)],
+                          sys.executable, "-c", compare_commits.DRIVER, str(ticks), str(warmup), str(result)],
                          cwd=ROOT, env=env, capture_output=True, text=True)
     if out.returncode != 0 or not raw.exists() or not result.exists():
         raise SystemExit(f"py-spy or the demo failed (exit {out.returncode}):\n{out.stderr[-3000:]}")
@@ -206,7 +186,7 @@ def main() -> None:
     if not by_category:
         raise SystemExit("no sample inside the profiled loop (too few ticks for the sampling rate?)")
     cal_end = calibrate()
-    us_per_tick = timing["wall_s"] / timing["ticks"] * 1e6
+    us_per_tick = timing["profiled_s"] / timing["ticks"] * 1e6
     print(calibration_line(cal))
     print(calibration_line(cal_end))
     print(f"demo loop (graphs/talos_sway.yaml, recorder + 3D view), {args.ticks} ticks after {args.warmup}, "
