@@ -146,6 +146,21 @@ def test_each_quantity_is_computed_once_per_state_and_matches_pinocchio(model):
     np.testing.assert_allclose(state.centroidal_drift, drift, rtol=1e-12, atol=1e-10)  # dA_G v: the same rate
 
 
+def test_every_array_a_state_hands_out_is_read_only(model):
+    q, v = random_state(model, 3)
+    state = state_at(model, q, v)
+    fid = model.getFrameId("left_sole_link")
+    frame, com = state.frame(fid), state.com
+    shared = [state.mass_matrix, state.bias_forces, state.inverse_mass_matrix, state.centroidal_momentum_matrix,
+              state.centroidal_momentum, state.centroidal_drift, com.position, com.velocity, com.jacobian, com.drift,
+              frame.placement, frame.rotation, frame.translation, frame.velocity, frame.jacobian, frame.drift]
+    for array in shared:
+        with pytest.raises(ValueError, match="read-only"):
+            array[...] = 0.0
+    assert state.inverse_mass_matrix is state.inverse_mass_matrix  # computed once, like the others
+    assert np.allclose(state.mass_matrix @ state.inverse_mass_matrix, np.eye(model.nv), atol=1e-8)  # untouched
+
+
 def test_the_mass_matrix_outputs_are_copies_that_outlive_the_pass(model):
     g = dg.Graph(dt=0.001)
     robot = g.add(RobotModel("robot"))

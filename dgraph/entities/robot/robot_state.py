@@ -89,9 +89,10 @@ class RobotState:
     by finite differences).
     ``mass_matrix`` and ``bias_forces`` are views of the pass's data, for the readers of the tick
     (the solver copies them into its QP); a read after the data was reused raises, and the
-    RobotModel outputs of the same names hand out copies. Every other quantity is computed from
+    RobotModel outputs of the same names hand out copies. Every other property is computed from
     that data at its first read and kept (a copy owned by this state, shared by every reader of
-    the tick): each is computed at most once per state.
+    the tick): each is computed at most once per state (the methods ``frame_placement`` and
+    ``gravity_torque`` compute at each call). Every array handed out is read-only.
     """
 
     def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray):
@@ -99,8 +100,8 @@ class RobotState:
         self._key = id(data)
         _OWNERS[self._key] = weakref.ref(self)
         pin.computeAllTerms(model, data, q, v)  # also leaves data.a = the accelerations at a = 0
-        self._mass_matrix = data.M.T  # M is symmetric to the bit (checked by a test): C-ordered as its transpose
-        self._bias_forces = data.nle
+        self._mass_matrix = _read_only(data.M.T)  # M is symmetric to the bit (checked by a test): C-ordered
+        self._bias_forces = _read_only(data.nle)
         self._frames: dict[tuple[int, pin.ReferenceFrame], FrameKinematics] = {}
 
     @property
@@ -130,13 +131,13 @@ class RobotState:
         return data
 
     # -- whole body -------------------------------------------------------------------------
-    @property
+    @computed_once
     def inverse_mass_matrix(self) -> np.ndarray:
         """``M(q)^-1`` from Pinocchio's sparse Cholesky factorisation of ``M`` (about 30 µs for
         TALOS, a quarter of a dense inverse; it writes only the factorisation fields of the data)."""
         data = self.data
         pin.cholesky.decompose(self.model, data)
-        return pin.cholesky.computeMinv(self.model, data).copy()
+        return _read_only(pin.cholesky.computeMinv(self.model, data).copy())
 
     @property
     def total_mass(self) -> float:
@@ -149,23 +150,24 @@ class RobotState:
         ``centerOfMass`` at the acceleration level on the pass's accelerations at ``a = 0``)."""
         data = self.data
         position = pin.centerOfMass(self.model, data, pin.KinematicLevel.ACCELERATION, False)  # a copy
-        return CenterOfMassKinematics(position, data.vcom[0].copy(), data.Jcom.copy(), data.acom[0].copy())
+        return CenterOfMassKinematics(*(_read_only(a) for a in (position, data.vcom[0].copy(), data.Jcom.copy(),
+                                                                 data.acom[0].copy())))
 
     @computed_once
     def centroidal_momentum_matrix(self) -> np.ndarray:
         """``A_G`` (6 x nv): ``h_G = [l, k] = A_G v`` at the CoM, world axes."""
-        return self.data.Ag.copy()
+        return _read_only(self.data.Ag.copy())
 
     @computed_once
     def centroidal_momentum(self) -> np.ndarray:
         """``h_G = [l, k]`` (linear, angular) at the CoM."""
-        return self.data.Ag @ self.v
+        return _read_only(self.data.Ag @ self.v)
 
     @computed_once
     def centroidal_drift(self) -> np.ndarray:
         """``A_G_dot v``: the momentum rate at ``a = 0`` (``h_G_dot = A_G a + A_G_dot v``), with
         the pass's ``dA_G``."""
-        return self.data.dAg @ self.v
+        return _read_only(self.data.dAg @ self.v)
 
     def gravity_torque(self) -> np.ndarray:
         """``g(q)``, the generalized gravity (used by fallbacks; computed on request)."""
@@ -186,14 +188,15 @@ class RobotState:
         kinematics = self._frames.get((frame, ref))
         if kinematics is None:
             model, data = self.model, self.data
-            placement = pin.updateFramePlacement(model, data, frame).homogeneous  # a fresh array
+            placement = _read_only(pin.updateFramePlacement(model, data, frame).homogeneous)  # a fresh array
             if ref == WORLD:
                 drift = pin.getFrameClassicalAcceleration(model, data, frame, WORLD).vector
             else:
                 drift = pin.getFrameAcceleration(model, data, frame, ref).vector
             kinematics = self._frames[frame, ref] = FrameKinematics(
-                placement, placement[:3, :3], placement[:3, 3], pin.getFrameVelocity(model, data, frame, ref).vector,
-                pin.getFrameJacobian(model, data, frame, ref), drift)
+                placement, placement[:3, :3], placement[:3, 3],
+                _read_only(pin.getFrameVelocity(model, data, frame, ref).vector),
+                _read_only(pin.getFrameJacobian(model, data, frame, ref)), _read_only(drift))
         return kinematics
 
     def frame_placement(self, frame: int) -> pin.SE3:
@@ -211,6 +214,13 @@ class RobotState:
     def frame_drift(self, frame: int, ref: pin.ReferenceFrame = WORLD) -> np.ndarray:
         """``J_dot v``: classical acceleration (``WORLD``) or spatial acceleration (``LOCAL``) at a = 0."""
         return self.frame(frame, ref).drift
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    """``array``, made read-only: it is shared by every reader of the tick (or is a view of
+    Pinocchio's data), and a reader writing into it would change what the others read."""
+    array.flags.writeable = False
+    return array
 
 
 def unactuated_dofs(model: pin.Model) -> int:
