@@ -9,7 +9,7 @@ import dgraph as dg
 from dgraph.entities.contacts.anchoring import AnchoredContact
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.robot.robot_state import LOCAL, FrameReader
-from dgraph.entities.robot.rotations import Rows, log3_product
+from dgraph.entities.robot.rotations import MatrixRows, log3_product
 from dgraph.entities.tasks.gains import Gains
 
 
@@ -44,7 +44,8 @@ def friction_pyramid(n_corners: int, mu: float) -> np.ndarray:
     return rows
 
 
-def placement_error(placement: Rows, anchor_rotation_t: Rows, anchor_translation: list[float]) -> list[float]:
+def placement_error(placement: MatrixRows, anchor_rotation_t: MatrixRows,
+                    anchor_translation: list[float]) -> list[float]:
     """``e = [R^T (p - p_a), log3(R_a^T R)]`` (local frame) from Python floats: the placement
     ``[[R, p], [0, 1]]`` (rows of the 4 x 4 matrix) of the frame against the anchor ``(R_a, p_a)``,
     given ``R_a^T``."""

@@ -12,11 +12,10 @@ from dgraph.entities.estimators.leg_odometry import (
     complementary_alpha,
     default_imu_frame,
     frame_id,
-    matrix_to_quat,
-    quat_to_rows,
     standing_configuration,
 )
 from dgraph.entities.robot.robot_state import load_model
+from dgraph.entities.robot.rotations import matrix_to_quat, quat_to_rows
 
 
 class Estimate:

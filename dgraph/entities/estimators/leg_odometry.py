@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from dgraph.entities.features.feature import contiguous
 from dgraph.errors import ParamError
 
 
@@ -59,52 +60,6 @@ def standing_configuration(model: Any, foot_frames: Sequence[str]) -> np.ndarray
     lowest = min(pin.updateFramePlacement(model, data, model.getFrameId(f)).translation[2] for f in foot_frames)
     q[2] -= lowest
     return q
-
-
-def quat_to_rows(q: Sequence[float]) -> list[list[float]]:
-    """Rows of the rotation matrix of a quaternion ``[x, y, z, w]`` (normalised here), in Python floats.
-
-    With ``(x, y, z, w)`` of unit norm: ``R = I + 2 w [u]x + 2 [u]x^2``, ``u = (x, y, z)``, i.e.
-    ``R_00 = 1 - 2 (y^2 + z^2)``, ``R_01 = 2 (x y - z w)``, ... (Eigen's expression order).
-    """
-    x, y, z, w = q
-    norm = math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x / norm, y / norm, z / norm, w / norm
-    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
-    twx, twy, twz, txx, txy, txz, tyy, tyz, tzz = tx * w, ty * w, tz * w, tx * x, ty * x, tz * x, ty * y, tz * y, tz * z
-    return [[1.0 - (tyy + tzz), txy - twz, txz + twy],
-            [txy + twz, 1.0 - (txx + tzz), tyz - twx],
-            [txz - twy, tyz + twx, 1.0 - (txx + tyy)]]
-
-
-def quat_to_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrix (an array) of a quaternion ``[x, y, z, w]`` (normalised here)."""
-    return np.array(quat_to_rows(np.asarray(q, dtype=float).tolist()))
-
-
-def matrix_to_quat(r: Any) -> list[float]:
-    """Quaternion ``[x, y, z, w]`` (``w >= 0``) of a rotation matrix (Shepperd's method).
-
-    ``r`` is an array or nested rows; Python floats throughout (a few dozen operations, cheaper
-    than as many numpy calls on 3-vectors).
-    """
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r.tolist() if isinstance(r, np.ndarray) else r
-    trace = r00 + r11 + r22
-    if trace > 0:
-        s = 2.0 * math.sqrt(1.0 + trace)
-        q = ((r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s, 0.25 * s)
-    elif r00 > r11 and r00 > r22:
-        s = 2.0 * math.sqrt(1.0 + r00 - r11 - r22)
-        q = (0.25 * s, (r01 + r10) / s, (r02 + r20) / s, (r21 - r12) / s)
-    elif r11 > r22:
-        s = 2.0 * math.sqrt(1.0 + r11 - r00 - r22)
-        q = ((r01 + r10) / s, 0.25 * s, (r12 + r21) / s, (r02 - r20) / s)
-    else:
-        s = 2.0 * math.sqrt(1.0 + r22 - r00 - r11)
-        q = ((r02 + r20) / s, (r12 + r21) / s, 0.25 * s, (r10 - r01) / s)
-    x, y, z, w = q
-    scale = (-1.0 if w < 0 else 1.0) / math.sqrt(x * x + y * y + z * z + w * w)
-    return [x * scale, y * scale, z * scale, w * scale]
 
 
 def complementary_alpha(cutoff: float, dt: float) -> float:
@@ -157,10 +112,10 @@ class RelativeKinematics:
         self._placements = _rows([(data.oMi[j].rotation, data.oMi[j].translation) for j in joints])
         self._motions = _rows([(data.v[j].linear, data.v[j].angular) for j in joints])
         kept_joints = sorted(kept - {0, 1})
-        self._q_joints = _selection([i for j in kept_joints for i in range(model.idx_qs[j] - 7,
-                                                                             model.idx_qs[j] - 7 + model.nqs[j])])
-        self._v_joints = _selection([i for j in kept_joints for i in range(model.idx_vs[j] - 6,
-                                                                             model.idx_vs[j] - 6 + model.nvs[j])])
+        self._q_joints = contiguous(np.array([i for j in kept_joints for i in range(
+            model.idx_qs[j] - 7, model.idx_qs[j] - 7 + model.nqs[j])], dtype=np.intp))  # a slice: a view
+        self._v_joints = contiguous(np.array([i for j in kept_joints for i in range(
+            model.idx_vs[j] - 6, model.idx_vs[j] - 6 + model.nvs[j])], dtype=np.intp))
         self._q = pin.neutral(reduced)  # the frames' joints stay at 0
         self._q[:7] = [0, 0, 0, 0, 0, 0, 1]
         self._v = np.zeros(reduced.nv)
@@ -204,9 +159,3 @@ def _addresses(array: np.ndarray) -> list[int]:
     return [start + sum(i * s for i, s in zip(index, array.strides, strict=True)) for index in order]
 
 
-def _selection(indices: list[int]) -> slice | np.ndarray:
-    """A slice if ``indices`` are consecutive (a view, cheaper than a gather), else an index array."""
-    if not indices:
-        return slice(0, 0)
-    first, end = indices[0], indices[0] + len(indices)
-    return slice(first, end) if indices == list(range(first, end)) else np.array(indices, dtype=np.intp)

@@ -1,4 +1,5 @@
-"""Rotation logarithms in Python floats, for the 3 x 3 matrices of one frame at one tick.
+"""Rotations in Python floats (logarithms, quaternions, cross products), for the 3-vectors and
+3 x 3 matrices of one frame at one tick.
 
 A numpy or Pinocchio call costs about a microsecond in a control tick whatever its size (its code
 is cold after the simulator's step), so ``log3(A B)`` of two 3 x 3 rotations is cheaper as 27
@@ -9,11 +10,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-Rows = Sequence[Sequence[float]]
+MatrixRows = Sequence[Sequence[float]]
 """A 3 x 3 matrix as three rows of three floats (``array.tolist()``)."""
 
 _NEAR_PI = -0.5
@@ -21,7 +23,7 @@ _NEAR_PI = -0.5
 reads it from the diagonal near ``theta = pi``, where ``R - R^T`` vanishes."""
 
 
-def log3_product(a: Rows, b: Rows) -> tuple[float, float, float]:
+def log3_product(a: MatrixRows, b: MatrixRows) -> tuple[float, float, float]:
     """``log3(A B)``: the rotation vector ``theta u`` of the rotation ``M = A B``.
 
     With ``vee(M - M^T) = 2 sin(theta) u`` and ``trace(M) = 1 + 2 cos(theta)``:
@@ -47,3 +49,54 @@ def log3_product(a: Rows, b: Rows) -> tuple[float, float, float]:
     sin = 0.5 * math.sqrt(x * x + y * y + z * z)
     scale = 0.5 * math.atan2(sin, cos) / sin if sin > 0.0 else 0.5
     return scale * x, scale * y, scale * z
+
+
+def quat_to_rows(q: Sequence[float]) -> list[list[float]]:
+    """Rows of the rotation matrix of a quaternion ``[x, y, z, w]`` (normalised here), in Python floats.
+
+    With ``(x, y, z, w)`` of unit norm: ``R = I + 2 w [u]x + 2 [u]x^2``, ``u = (x, y, z)``, i.e.
+    ``R_00 = 1 - 2 (y^2 + z^2)``, ``R_01 = 2 (x y - z w)``, ... (Eigen's expression order).
+    """
+    x, y, z, w = q
+    norm = math.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = x / norm, y / norm, z / norm, w / norm
+    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+    twx, twy, twz, txx, txy, txz, tyy, tyz, tzz = tx * w, ty * w, tz * w, tx * x, ty * x, tz * x, ty * y, tz * y, tz * z
+    return [[1.0 - (tyy + tzz), txy - twz, txz + twy],
+            [txy + twz, 1.0 - (txx + tzz), tyz - twx],
+            [txz - twy, tyz + twx, 1.0 - (txx + tyy)]]
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrix (an array) of a quaternion ``[x, y, z, w]`` (normalised here)."""
+    return np.array(quat_to_rows(np.asarray(q, dtype=float).tolist()))
+
+
+def matrix_to_quat(r: Any) -> list[float]:
+    """Quaternion ``[x, y, z, w]`` (``w >= 0``) of a rotation matrix (Shepperd's method).
+
+    ``r`` is an array or nested rows; Python floats throughout (a few dozen operations, cheaper
+    than as many numpy calls on 3-vectors).
+    """
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = r.tolist() if isinstance(r, np.ndarray) else r
+    trace = r00 + r11 + r22
+    if trace > 0:
+        s = 2.0 * math.sqrt(1.0 + trace)
+        q = ((r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s, 0.25 * s)
+    elif r00 > r11 and r00 > r22:
+        s = 2.0 * math.sqrt(1.0 + r00 - r11 - r22)
+        q = (0.25 * s, (r01 + r10) / s, (r02 + r20) / s, (r21 - r12) / s)
+    elif r11 > r22:
+        s = 2.0 * math.sqrt(1.0 + r11 - r00 - r22)
+        q = ((r01 + r10) / s, 0.25 * s, (r12 + r21) / s, (r02 - r20) / s)
+    else:
+        s = 2.0 * math.sqrt(1.0 + r22 - r00 - r11)
+        q = ((r02 + r20) / s, (r12 + r21) / s, 0.25 * s, (r10 - r01) / s)
+    x, y, z, w = q
+    scale = (-1.0 if w < 0 else 1.0) / math.sqrt(x * x + y * y + z * z + w * w)
+    return [x * scale, y * scale, z * scale, w * scale]
+
+
+def cross(a: Sequence[float], b: Sequence[float]) -> list[float]:
+    """``a × b`` of 3-vectors in Python floats (``np.cross`` costs tens of µs on 3-vectors)."""
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]

@@ -6,27 +6,23 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.robot.robot_state import RobotState, frame_problems
+from dgraph.entities.robot.rotations import cross
 
 GRAVITY = 9.81
-
-
-def _cross(a: list[float], b: list[float]) -> list[float]:
-    """``a × b`` of 3-vectors in Python floats (``np.cross`` costs tens of µs on 3-vectors)."""
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 
 
 def world_wrench(position: np.ndarray, rotation: np.ndarray, wrench: np.ndarray) -> np.ndarray:
     """A sensor-frame ``[force, torque about the sensor origin]`` as ``[force, torque about the
     world origin]``, world axes: ``f_W = R f``, ``τ_O = p × f_W + R τ``."""
     world = (rotation @ wrench.reshape(2, 3).T).T.tolist()  # [R f, R τ]
-    moment = _cross(position.tolist(), world[0])
+    moment = cross(position.tolist(), world[0])
     return np.array([*world[0], moment[0] + world[1][0], moment[1] + world[1][1], moment[2] + world[1][2]])
 
 
 def point_force(point: np.ndarray, force: np.ndarray) -> np.ndarray:
     """``[f, p × f]``: a force applied at ``point``, as a wrench about the world origin."""
     f = force.tolist()
-    return np.array([*f, *_cross(point.tolist(), f)])
+    return np.array([*f, *cross(point.tolist(), f)])
 
 
 def zero_moment_point(wrench: np.ndarray, height: float = 0.0) -> np.ndarray:

@@ -9,13 +9,8 @@ from synthetic_talos import DT, SENSORS, Lift, Playback, Trajectory, generate
 
 import dgraph as dg
 from dgraph.entities.estimators import FloatingBaseEstimator
-from dgraph.entities.estimators.leg_odometry import (
-    RelativeKinematics,
-    _rows,
-    complementary_alpha,
-    matrix_to_quat,
-    quat_to_matrix,
-)
+from dgraph.entities.estimators.leg_odometry import RelativeKinematics, _rows, complementary_alpha
+from dgraph.entities.robot.rotations import quat_to_matrix
 
 SETTLED = 1000  # ticks: 1 s, about 6 time constants of the 1 Hz complementary filter
 
@@ -204,26 +199,6 @@ def test_defaults_and_registry():
     assert dg.get_type("FloatingBaseEstimator") is FloatingBaseEstimator
     assert complementary_alpha(float("inf"), DT) == 0.0
     assert complementary_alpha(1.0, DT) == pytest.approx(1 / (1 + 2 * np.pi * DT))
-
-
-def test_quaternion_helpers_round_trip(rng):
-    for _ in range(50):
-        quat = rng.normal(size=4)
-        quat /= np.linalg.norm(quat)
-        r = quat_to_matrix(quat)
-        assert np.allclose(r, pin.Quaternion(quat).toRotationMatrix())
-        back = matrix_to_quat(r)
-        assert np.allclose(back, quat if quat[3] >= 0 else -quat)
-
-
-def test_quaternion_of_a_matrix_in_every_branch_of_shepperds_method():
-    # trace > 0, then the largest diagonal entry first, second, third (rotations by pi about x, y, z)
-    for axis in (np.zeros(3), [np.pi, 0.0, 0.0], [0.0, np.pi, 0.0], [0.0, 0.0, np.pi]):
-        r = pin.exp3(np.asarray(axis, dtype=float) + 0.1 * np.array([0.3, -0.2, 0.1]))
-        quat = np.array(matrix_to_quat(r))
-        assert quat[3] >= 0 and np.linalg.norm(quat) == pytest.approx(1.0, abs=1e-15)
-        np.testing.assert_allclose(quat_to_matrix(quat), r, atol=1e-14)
-        assert np.array_equal(matrix_to_quat(r.tolist()), matrix_to_quat(r))  # rows or an array
 
 
 @pytest.mark.parametrize("frames", [
