@@ -272,8 +272,9 @@ class MujocoDevice(dg.Device):
         else:
             command = (self.control(t), self.feedforward_torque(t), self.velocity_reference(t))
             tau = self._pd(command)
-        if math.isfinite(np.dot(tau, tau)):
-            self._held_next = command
+        if math.isfinite(np.dot(tau, tau)):  # kept as a copy: a producer may reuse its buffer
+            self._held_next = np.array(command, dtype=float) if self._torque_mode else tuple(
+                np.array(part, dtype=float) for part in command)
             return tau, False
         self._held_next = self._held if self._held is not None else self._hold_default()
         return (self._held_next if self._torque_mode else self._pd(self._held_next)), True

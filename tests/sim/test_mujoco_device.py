@@ -180,21 +180,30 @@ def test_divergence_raises_and_keeps_the_state():
 
 
 class Commands(dg.Entity):
-    """A test source: row ``t`` of ``rows`` (NaN allowed: the graph's value checks are off)."""
+    """A test source: row ``t`` of ``rows`` (NaN allowed: the graph's value checks are off), or
+    with ``reuse`` that row copied into one buffer handed out at every tick."""
 
     rows = dg.Param(kind="object")
+    reuse = dg.Param(False, kind="bool")
+
+    def configure(self):
+        self._buffer = np.zeros(32)
 
     @dg.output(shape=(32,), depends=("t",))
     def value(self, t):
-        return self.rows[min(t, len(self.rows) - 1)]
+        row = self.rows[min(t, len(self.rows) - 1)]
+        if self.reuse:
+            self._buffer[:] = row
+            return self._buffer
+        return row
 
 
-def play(rows, mode="torque", port="control", ticks=None, fail_at=None, **inputs):
+def play(rows, mode="torque", port="control", ticks=None, fail_at=None, reuse=False, **inputs):
     """Run a device fed ``rows`` on ``port`` (other inputs constant); per tick: q, v, ctrl, control_fault."""
     g = dg.Graph(dt=0.001)
     g.check_values = False  # let NaN through to the device, as an unchecked upstream entity would
     dev = g.add(MujocoDevice("sim", control_mode=mode))
-    g.add(Commands("commands", rows=np.asarray(rows, dtype=float)))
+    g.add(Commands("commands", rows=np.asarray(rows, dtype=float), reuse=reuse))
     g.plug("commands.value", f"sim.{port}")
     for name, value in inputs.items():
         dev.signal(name).set(value)
@@ -242,6 +251,15 @@ def test_without_any_valid_torque_yet_the_fallback_is_zero():
     faulty, reference = play(rows), play(np.where(np.isnan(rows), 0.0, rows))
     assert faulty["fault"][:6].tolist() == [1, 2, 3, 4, 5, 0]
     np.testing.assert_array_equal(faulty["q"], reference["q"])
+
+
+def test_the_command_held_is_a_copy_when_its_producer_reuses_its_buffer():
+    rows = np.random.default_rng(2).normal(0.0, 20.0, (20, 32))
+    rows[8:12] = np.nan  # written into the buffer that held the last valid command
+    fresh, reused = play(rows), play(rows, reuse=True)
+    assert reused["fault"].tolist() == fresh["fault"].tolist() == [0] * 8 + [1, 2, 3, 4] + [0] * 8
+    np.testing.assert_array_equal(reused["q"], fresh["q"])
+    assert np.isfinite(reused["ctrl"]).all()
 
 
 def test_position_mode_holds_the_last_valid_target_velocity_and_feedforward():
