@@ -120,7 +120,6 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
         self._lower = np.concatenate([np.full(len(pyramid), -np.inf), [self.min_normal_force]])
         self._upper = np.concatenate([np.zeros(len(pyramid)), [self.max_normal_force]])
         self._anchor: tuple[pin.SE3, list[list[float]], list[float]] | None = None  # the anchor taken apart
-        self._gain_floats: tuple[np.ndarray, np.ndarray, list[float], list[float]] | None = None
 
     def here(self, t: int) -> pin.SE3:
         """The frame's placement at ``t`` (a copy)."""
@@ -135,14 +134,6 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
             cached = self._anchor = (anchor, anchor.rotation.T.tolist(), anchor.translation.tolist())
         return cached[1], cached[2]
 
-    def _gain_lists(self, t: int) -> tuple[list[float], list[float]]:
-        """``Kp``, ``Kd`` (6 each) as Python floats, converted again only for new gain vectors."""
-        kp, kd = self._gains.vector("kp", 6, t), self._gains.vector("kd", 6, t)
-        cached = self._gain_floats
-        if cached is None or cached[0] is not kp or cached[1] is not kd:
-            cached = self._gain_floats = (kp, kd, kp.tolist(), kd.tolist())
-        return cached[2], cached[3]
-
     @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "anchor"))
     def contact(self, t: int) -> ContactConstraint:
         """Motion rows, force generator and friction rows at ``t``: ``J a = -Kp e - Kd V - J_dot v``
@@ -152,7 +143,9 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
         frame = state.frame(self.frame_index(state), LOCAL)
         rotation = frame.rotation
         error = placement_error(frame.placement.tolist(), *self._anchor_terms(t))
-        rhs = motion_rhs(*self._gain_lists(t), error, frame.velocity.tolist(), frame.drift.tolist())
+        gains = self._gains
+        rhs = motion_rhs(gains.floats("kp", 6, t), gains.floats("kd", 6, t), error, frame.velocity.tolist(),
+                         frame.drift.tolist())
         return ContactConstraint(self.name, bool(self.active(t)), frame.jacobian, rhs, self._generator,
                                  self._friction, self._lower, self._upper, self.force_weight, rotation,
                                  np.array(error))

@@ -25,6 +25,7 @@ class Gains:
     def __init__(self, entity: dg.Entity):
         self.entity = entity
         self._cache: dict[str, tuple[dg.Input, Any, Any, np.ndarray]] = {}  # name: (input, value, its key, vector)
+        self._floats: dict[str, tuple[np.ndarray, list[float]]] = {}  # name: (vector, its Python floats)
 
     def vector(self, name: str, size: int, t: int) -> np.ndarray:
         """The input ``name`` at ``t`` as ``size`` values >= 0 (``SpecError`` naming it otherwise)."""
@@ -34,6 +35,15 @@ class Gains:
             if inp(t) is cached[1] and inp._source is None and len(vector) == size:
                 return vector  # the same constant as last time
         return self._read(name, size, t, cached)
+
+    def floats(self, name: str, size: int, t: int) -> list[float]:
+        """:meth:`vector` as Python floats (for arithmetic on a few rows without numpy calls),
+        converted once per new vector."""
+        vector = self.vector(name, size, t)
+        cached = self._floats.get(name)
+        if cached is None or cached[0] is not vector:
+            cached = self._floats[name] = (vector, vector.tolist())
+        return cached[1]
 
     def _read(self, name: str, size: int, t: int, cached: tuple[dg.Input, Any, Any, np.ndarray] | None) -> np.ndarray:
         """A value that is not the constant last converted: compared by value, converted if new."""
