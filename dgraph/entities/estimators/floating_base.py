@@ -161,7 +161,6 @@ class FloatingBaseEstimator(dg.Entity):
         names = [*self.foot_frames, self.imu_frame_name, *self.ft_frames]
         self._kinematics = RelativeKinematics(model, names)  # left, right, IMU, sensors left, right
         self._gravity = np.array(model.gravity.linear, dtype=float).tolist()
-        self._alpha_dt, self._alpha = None, 0.0
 
     def setup(self) -> None:
         """Index the per-foot states (left, right)."""
@@ -257,7 +256,7 @@ class FloatingBaseEstimator(dg.Entity):
         k0, k1, k2 = r00 * d0 + r01 * d1 + r02 * d2, r10 * d0 + r11 * d1 + r12 * d2, r20 * d0 + r21 * d1 + r22 * d2
         if not self.velocity_initialised(t):
             return [k0, k1, k2]
-        alpha = self._filter_weight(dt)
+        alpha = complementary_alpha(self.cutoff_frequency, dt)
         x0, x1, x2, _, _, _ = self.prediction(t).tolist()
         return [alpha * x0 + (1.0 - alpha) * k0, alpha * x1 + (1.0 - alpha) * k1, alpha * x2 + (1.0 - alpha) * k2]
 
@@ -283,12 +282,6 @@ class FloatingBaseEstimator(dg.Entity):
                        v2 + dt * (e20 * a0 + e21 * a1 + e22 * a2 + g2), p0 + dt * b0, p1 + dt * b1, p2 + dt * b2,
                        b0, b1, b2]
         return values
-
-    def _filter_weight(self, dt: float) -> float:
-        """``alpha`` of (6) for ``dt`` (computed again only if ``dt`` changes)."""
-        if dt != self._alpha_dt:
-            self._alpha_dt, self._alpha = dt, complementary_alpha(self.cutoff_frequency, dt)
-        return self._alpha
 
     @dg.output(shape=("nq",), depends=("estimate",))
     def q(self, t: int) -> Any:

@@ -89,8 +89,7 @@ class Feature(dg.Entity, abc.ABC):
     @dg.output(dtype="object")
     def feature(self, t: int) -> FeatureValue:
         """Error, error rate, Jacobian, drift and reference acceleration (masked rows)."""
-        value = self.evaluate(self.robot(t), t)
-        return value if self.rows is None else value.select(self.rows)
+        return self.evaluate(self.robot(t), t).select(self.rows)
 
     @dg.output(shape=("size",), depends=("feature",))
     def error(self, t: int) -> np.ndarray:

@@ -44,12 +44,9 @@ class Sinusoid(dg.Entity):
         phase = np.broadcast_to(self.phase, self.value_shape)
         self._offset = np.broadcast_to(self.offset, self.value_shape)
         self._scalar = self.value_shape == ()
-        self._floats: tuple[list[float], list[float]] | None = None  # (A, offset) of a 3-vector, in floats
         if omega.size and (omega == omega.flat[0]).all() and (phase == phase.flat[0]).all():
             self._omega, self._phase = float(omega.flat[0]), float(phase.flat[0])
             self._sin, self._cos = math.sin, math.cos
-            if self.value_shape == (3,):
-                self._floats = (self._amplitude.tolist(), np.asarray(self._offset, dtype=float).tolist())
         else:
             self._omega, self._phase, self._sin, self._cos = omega, phase, np.sin, np.cos
         self._last: tuple[int, tuple[Any, Any, Any]] | None = None
@@ -79,12 +76,7 @@ class Sinusoid(dg.Entity):
         return waves
 
     def _scaled(self, k0: Any, k1: Any, k2: Any) -> tuple[Any, Any, Any]:
-        """``offset + k0 A``, ``k1 A``, ``k2 A``; a 3-vector with one frequency is written out in
-        Python floats (three arrays built instead of four numpy operations: ~2 µs less per tick)."""
-        if self._floats is not None:
-            (a0, a1, a2), (o0, o1, o2) = self._floats
-            return (np.array((o0 + k0 * a0, o1 + k0 * a1, o2 + k0 * a2)), np.array((k1 * a0, k1 * a1, k1 * a2)),
-                    np.array((k2 * a0, k2 * a1, k2 * a2)))
+        """``offset + k0 A``, ``k1 A``, ``k2 A`` (Python floats for a scalar sinusoid)."""
         amplitude = self._amplitude
         waves = (self._offset + k0 * amplitude, k1 * amplitude, k2 * amplitude)
         return tuple(float(w) for w in waves) if self._scalar else waves
