@@ -68,7 +68,7 @@ def test_sinusoid_with_a_frequency_and_a_phase_per_component():
     s = graph.add(Sinusoid("s", amplitude=[0.1, 0.2], frequency=[0.5, 2.0], phase=[0.0, 1.0], offset=[1.0, 0.0],
                            ramp=0.5))
     w, phase = 2 * np.pi * np.array([0.5, 2.0]), np.array([0.0, 1.0])
-    assert np.allclose(s.output(700), [1.0, 0.0] + np.array([0.1, 0.2]) * np.sin(w * 0.7 + phase), atol=1e-15)
+    assert np.allclose(s.output(700), [1.0, 0.0] + np.array([0.1, 0.2]) * np.sin(w * 0.7 + phase), rtol=0, atol=1e-15)
     for t in (200, 700):  # inside and after the fade-in (truncation: h^2 / 6 times A w^3 ~ 7e-5, A w^4 ~ 1e-3)
         h = 1e-3
         assert np.allclose((s.output(t + 1) - s.output(t - 1)) / (2 * h), s.velocity(t), atol=2e-4)

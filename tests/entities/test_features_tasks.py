@@ -32,6 +32,17 @@ def random_state(seed):
     return model, q, rng.normal(size=model.nv)
 
 
+def com_task_graph(seed, **task_params):
+    """A robot at a random state, a CenterOfMass (reference 0) and a Task on it."""
+    _, q, v = random_state(seed)
+    g, robot = robot_graph(q, v)
+    g.add(CenterOfMass("com")).reference_position.set(np.zeros(3))
+    task = g.add(Task("task", **task_params))
+    g.plug("robot.state", "com.robot")
+    g.plug("com.feature", "task.feature")
+    return g, robot, task
+
+
 def feature_at(make, q, v, setup=lambda f: None):
     g, _ = robot_graph(q, v)
     feature = g.add(make())
@@ -128,12 +139,7 @@ def test_task_equation_is_the_pd_law_minus_the_drift():
 
 
 def test_task_gain_errors_and_critical_damping():
-    _, q, v = random_state(5)
-    g, _ = robot_graph(q, v)
-    g.add(CenterOfMass("com")).reference_position.set(np.zeros(3))
-    task = g.add(Task("task", critical_damping=True))
-    g.plug("robot.state", "com.robot")
-    g.plug("com.feature", "task.feature")
+    g, _, task = com_task_graph(5, critical_damping=True)
     assert "kd" not in task.inputs
     task.kp.set(16.0)
     f = g["com"].feature(0)
@@ -158,13 +164,8 @@ def test_gains_follow_a_producer_that_reuses_its_buffer():
             self.buffer[:] = 4.0 * (t + 1) ** 2
             return self.buffer
 
-    _, q, v = random_state(6)
-    g, _ = robot_graph(q, v)
-    g.add(CenterOfMass("com")).reference_position.set(np.zeros(3))
-    task = g.add(Task("task", critical_damping=True))
+    g, _, task = com_task_graph(6, critical_damping=True)
     g.add(Schedule("schedule"))
-    g.plug("robot.state", "com.robot")
-    g.plug("com.feature", "task.feature")
     g.plug("schedule.kp", "task.kp")
     f = g["com"].feature(0)
     for t in (0, 1, 2):  # kp = 4, 16, 36: Kd = 4, 8, 12
@@ -173,12 +174,7 @@ def test_gains_follow_a_producer_that_reuses_its_buffer():
 
 
 def test_a_solver_reads_one_output_per_task_and_the_others_follow_from_it():
-    _, q, v = random_state(7)
-    g, _ = robot_graph(q, v)
-    g.add(CenterOfMass("com")).reference_position.set(np.zeros(3))
-    task = g.add(Task("task"))
-    g.plug("robot.state", "com.robot")
-    g.plug("com.feature", "task.feature")
+    _, _, task = com_task_graph(7)
     task.kp.set(np.array([10.0, 20.0, 30.0]))
     task.kd.set(5.0)
     equation = task.equation(0)
@@ -192,15 +188,10 @@ def test_a_solver_reads_one_output_per_task_and_the_others_follow_from_it():
 
 
 def test_constant_gains_are_converted_once_and_again_when_set():
-    _, q, v = random_state(8)
-    g, robot = robot_graph(q, v)
-    g.add(CenterOfMass("com")).reference_position.set(np.zeros(3))
-    task = g.add(Task("task", critical_damping=True))
-    g.plug("robot.state", "com.robot")
-    g.plug("com.feature", "task.feature")
+    _, robot, task = com_task_graph(8, critical_damping=True)
     task.kp.set(np.array([4.0, 9.0, 16.0]))
     first = task.equation(0)
-    robot.v.set(2 * v)  # the feature changes, the gains do not
+    robot.v.set(2 * robot.v.value)  # the feature changes, the gains do not
     second = task.equation(1)
     assert second is not first and second.kp is first.kp and second.kd is first.kd and second.weight is first.weight
     np.testing.assert_array_equal(second.kd, [4.0, 6.0, 8.0])

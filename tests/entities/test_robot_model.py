@@ -25,6 +25,15 @@ def random_state(model, seed):
     return q, rng.normal(size=model.nv)
 
 
+def robot_at(model, seed, frames=()):
+    """A RobotModel (with ``frames`` as outputs) in a graph, at the random state of ``seed``."""
+    robot = dg.Graph(dt=0.001).add(RobotModel("robot", frames=list(frames)))
+    q, v = random_state(model, seed)
+    robot.q.set(q)
+    robot.v.set(v)
+    return robot, q, v
+
+
 def state_at(model, q, v):
     return RobotState(model, model.createData(), q, v)
 
@@ -101,11 +110,7 @@ def test_com_and_centroidal_terms_by_finite_differences(model):
 
 
 def test_entity_outputs_share_one_pass_per_tick(model):
-    g = dg.Graph(dt=0.001)
-    robot = g.add(RobotModel("robot", frames=["left_sole_link", "right_sole_link"]))
-    q, v = random_state(model, 5)
-    robot.q.set(q)
-    robot.v.set(v)
+    robot, q, _ = robot_at(model, 5, frames=["left_sole_link", "right_sole_link"])
     for name in ("mass_matrix", "bias_forces", "com_position", "com_jacobian", "centroidal_drift",
                  "left_sole_link_jacobian", "right_sole_link_placement", "right_sole_link_drift"):
         robot.signal(name)(0)
@@ -118,11 +123,7 @@ def test_entity_outputs_share_one_pass_per_tick(model):
 
 
 def test_each_quantity_is_computed_once_per_state_and_matches_pinocchio(model):
-    g = dg.Graph(dt=0.001)
-    robot = g.add(RobotModel("robot", frames=["left_sole_link"]))
-    q, v = random_state(model, 7)
-    robot.q.set(q)
-    robot.v.set(v)
+    robot, q, v = robot_at(model, 7, frames=["left_sole_link"])
     state, fid = robot.state(0), model.getFrameId("left_sole_link")
     assert state.com is state.com and state.frame(fid) is state.frame(fid, WORLD)
     assert state.frame(fid, LOCAL) is not state.frame(fid, WORLD)
@@ -162,11 +163,7 @@ def test_every_array_a_state_hands_out_is_read_only(model):
 
 
 def test_the_mass_matrix_outputs_are_copies_that_outlive_the_pass(model):
-    g = dg.Graph(dt=0.001)
-    robot = g.add(RobotModel("robot"))
-    q, v = random_state(model, 8)
-    robot.q.set(q)
-    robot.v.set(v)
+    robot, q, v = robot_at(model, 8)
     mass, bias = robot.mass_matrix(0), robot.bias_forces(0)
     state = robot.state(0)
     assert np.shares_memory(state.mass_matrix, state.data.M) and not np.shares_memory(mass, state.data.M)
@@ -194,11 +191,7 @@ def test_bad_frame_and_model_are_clear_errors():
 
 
 def test_a_state_kept_past_its_pass_raises_instead_of_answering_for_another(model):
-    g = dg.Graph(dt=0.001)
-    robot = g.add(RobotModel("robot"))
-    q, v = random_state(model, 6)
-    robot.q.set(q)
-    robot.v.set(v)
+    robot, q, _ = robot_at(model, 6)
     old = robot.state(0)
     fid = model.getFrameId("left_sole_link")
     com, placement, sole = old.com, old.frame_placement(fid), old.frame(fid)
