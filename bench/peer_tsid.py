@@ -177,17 +177,24 @@ def posture_gain(gain, model: pin.Model, na: int) -> np.ndarray:
     return out
 
 
+def add_motion_task(formulation: tsid.InverseDynamicsFormulationAccForce, task: object, cfg: dict,
+                    size: int) -> object:
+    """``task`` with the config's gains (``kd`` null: ``2 sqrt(kp)``), added at level 1 with its weight."""
+    kp = vector(cfg["kp"], size)
+    task.setKp(kp)
+    task.setKd(kd_of(kp, cfg["kd"]))
+    formulation.addMotionTask(task, float(cfg["weight"]), 1, 0.0)
+    return task
+
+
 def add_se3_task(formulation: tsid.InverseDynamicsFormulationAccForce, robot: tsid.RobotWrapper,
                  data: pin.Data, cfg: dict) -> tsid.TaskSE3Equality:
     """A TaskSE3Equality on ``cfg["frame"]`` (level 1), held at the frame's initial pose."""
     model = robot.model()
     task = tsid.TaskSE3Equality(cfg["name"], robot, cfg["frame"])
-    kp = vector(cfg["kp"], 6)
-    task.setKp(kp)
-    task.setKd(kd_of(kp, cfg["kd"]))
     task.setMask(np.asarray(cfg["mask"], dtype=float))
     task.useLocalFrame(bool(cfg["local_frame"]))
-    formulation.addMotionTask(task, float(cfg["weight"]), 1, 0.0)
+    add_motion_task(formulation, task, cfg, 6)
     h0 = robot.framePosition(data, model.getFrameId(cfg["frame"]))
     task.setReference(tsid.TrajectorySE3Constant(f"traj-{cfg['name']}", h0).computeNext())
     return task
@@ -275,11 +282,7 @@ def run(cfg: dict) -> dict:
     com_cfg = cfg["com"]
     com_task = com_sample = None
     if enabled(com_cfg):
-        com_task = tsid.TaskComEquality("task-com", robot)
-        kp = vector(com_cfg["kp"], 3)
-        com_task.setKp(kp)
-        com_task.setKd(kd_of(kp, com_cfg["kd"]))
-        formulation.addMotionTask(com_task, float(com_cfg["weight"]), 1, 0.0)
+        com_task = add_motion_task(formulation, tsid.TaskComEquality("task-com", robot), com_cfg, 3)
         com_sample = tsid.TrajectorySample(3)
         tasks.append("task-com")
     com0 = robot.com(data).copy() + np.asarray(com_cfg["offset"] if com_cfg else [0, 0, 0], float)
@@ -304,11 +307,7 @@ def run(cfg: dict) -> dict:
 
     m_cfg = cfg["momentum"]
     if enabled(m_cfg):
-        momentum = tsid.TaskAMEquality("task-am", robot)
-        kp = vector(m_cfg["kp"], 3)
-        momentum.setKp(kp)
-        momentum.setKd(kd_of(kp, m_cfg["kd"]))
-        formulation.addMotionTask(momentum, float(m_cfg["weight"]), 1, 0.0)
+        momentum = add_motion_task(formulation, tsid.TaskAMEquality("task-am", robot), m_cfg, 3)
         momentum.setReference(tsid.TrajectorySample(3))  # L* = 0, dL* = 0
         tasks.append("task-am")
 
