@@ -8,7 +8,7 @@ import pytest
 
 import dgraph as dg
 from dgraph.entities.robot import RobotModel, RobotState, load_model
-from dgraph.entities.robot.robot_state import LOCAL, WORLD
+from dgraph.entities.robot.robot_state import LOCAL, WORLD, DataFields
 
 EPS = 1e-6
 
@@ -227,3 +227,32 @@ def test_inverse_mass_matrix_inverts_the_mass_matrix_and_leaves_the_drifts():
     for name in ("position", "velocity", "jacobian", "drift"):
         np.testing.assert_array_equal(getattr(state.com, name), getattr(fresh.com, name))
     np.testing.assert_array_equal(state.frame(3, LOCAL).drift, fresh.frame(3, LOCAL).drift)
+
+
+def test_the_field_views_made_once_per_data_follow_every_pass_on_it(model):
+    """A RobotModel's states share the views of its data's fields (made once): after passes on other
+    states they still give what a state on a fresh data gives, bit for bit."""
+    robot, _, _ = robot_at(model, 9)
+    for seed in (10, 11, 12):
+        q, v = random_state(model, seed)
+        robot.q.set(q)
+        robot.v.set(v)
+        state, fresh = robot.state(0), state_at(model, q, v)
+        assert state.fields is robot.state(0).fields
+        for name in ("mass_matrix", "bias_forces", "centroidal_momentum_matrix", "centroidal_momentum",
+                     "centroidal_drift"):
+            np.testing.assert_array_equal(getattr(state, name), getattr(fresh, name))
+        for name in ("position", "velocity", "jacobian", "drift"):
+            np.testing.assert_array_equal(getattr(state.com, name), getattr(fresh.com, name))
+        data = model.createData()
+        pin.computeAllTerms(model, data, q, v)
+        np.testing.assert_array_equal(state.mass_matrix, data.M.T)
+        np.testing.assert_array_equal(state.com.jacobian, data.Jcom)
+
+
+def test_a_state_refuses_the_field_views_of_another_data(model):
+    q, v = random_state(model, 13)
+    data = model.createData()
+    with pytest.raises(ValueError, match="views of another Pinocchio data"):
+        RobotState(model, data, q, v, DataFields(model.createData()))
+    assert RobotState(model, data, q, v, DataFields(data)).fields.data is data

@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 import dgraph as dg
-from dgraph.entities.robot.robot_state import RobotState, load_model
+from dgraph.entities.robot.robot_state import DataFields, RobotState, load_model
 
 
 def _frame_outputs(frame: str, frame_id: int) -> dict[str, dg.Output]:
@@ -103,6 +103,7 @@ class RobotModel(dg.Entity):
             self.pin_model = with_tool_frames(self.pin_model, self.tool_frames, self.name)
         self.nq, self.nv = self.pin_model.nq, self.pin_model.nv
         self._data = self.pin_model.createData()
+        self._fields = DataFields(self._data)  # the views every pass on it refills
         for frame in self.frames:
             if not self.pin_model.existFrame(frame):
                 raise dg.ParamError(f"{self.name}: the model has no frame {frame!r}", entity=self.name)
@@ -114,7 +115,7 @@ class RobotModel(dg.Entity):
     @dg.output(dtype="object", depends=("q", "v"))
     def state(self, t: int) -> RobotState:
         """The shared Pinocchio pass at ``(q(t), v(t))``."""
-        return RobotState(self.pin_model, self._data, self.q(t), self.v(t))
+        return RobotState(self.pin_model, self._data, self.q(t), self.v(t), self._fields)
 
     @dg.output(shape=("nv", "nv"), depends=("state",))
     def mass_matrix(self, t: int) -> np.ndarray:

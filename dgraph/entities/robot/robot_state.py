@@ -79,6 +79,30 @@ class CenterOfMassKinematics:
     drift: np.ndarray
 
 
+class DataFields:
+    """Read-only numpy views of the fields of one Pinocchio data that :class:`RobotState` reads:
+    ``mass_matrix`` (``M`` as its transpose, C-ordered: ``M`` is symmetric to the bit),
+    ``bias_forces`` (``nle``), ``com_velocity`` and ``com_acceleration`` (``vcom[0]``,
+    ``acom[0]``), ``com_jacobian`` (``Jcom``), ``momentum_matrix`` (``Ag``) and
+    ``momentum_matrix_rate`` (``dAg``).
+
+    Every pass on the data refills the same memory, so the views are made once per data (each
+    eigenpy access costs about a microsecond) and the states of its successive passes share
+    them; each view keeps the data alive.
+    """
+
+    __slots__ = ("bias_forces", "com_acceleration", "com_jacobian", "com_velocity", "data", "mass_matrix",
+                 "momentum_matrix", "momentum_matrix_rate")
+
+    def __init__(self, data: pin.Data):
+        self.data = data
+        self.mass_matrix = _read_only(data.M.T)
+        self.bias_forces = _read_only(data.nle)
+        self.com_velocity, self.com_acceleration = _read_only(data.vcom[0]), _read_only(data.acom[0])
+        self.com_jacobian = _read_only(data.Jcom)
+        self.momentum_matrix, self.momentum_matrix_rate = _read_only(data.Ag), _read_only(data.dAg)
+
+
 class RobotState:
     """Kinematics and dynamics of ``model`` at ``(q, v)``, computed once.
 
@@ -93,29 +117,33 @@ class RobotState:
     that data at its first read and kept (a copy owned by this state, shared by every reader of
     the tick): each is computed at most once per state (the methods ``frame_placement`` and
     ``gravity_torque`` compute at each call). Every array handed out is read-only.
+
+    ``fields`` are the :class:`DataFields` of ``data``, made once by the data's owner (a
+    :class:`~dgraph.entities.robot.model.RobotModel`) for all its passes; made here if not given.
     """
 
-    def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray):
-        self.model, self._pin_data, self.q, self.v = model, data, q, v
+    def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray,
+                 fields: DataFields | None = None):
+        if fields is None:
+            fields = DataFields(data)
+        elif fields.data is not data:
+            raise ValueError("RobotState: fields are the views of another Pinocchio data")
+        self.model, self._pin_data, self._fields, self.q, self.v = model, data, fields, q, v
         self._key = id(data)
         _OWNERS[self._key] = weakref.ref(self)
         pin.computeAllTerms(model, data, q, v)  # also leaves data.a = the accelerations at a = 0
-        self._mass_matrix = _read_only(data.M.T)  # M is symmetric to the bit (checked by a test): C-ordered
-        self._bias_forces = _read_only(data.nle)
         self._frames: dict[tuple[int, pin.ReferenceFrame], FrameKinematics] = {}
 
     @property
     def mass_matrix(self) -> np.ndarray:
         """``M(q)`` (nv x nv, symmetric): a view of the pass's data, valid while it is this state's
         (copy it to keep it past the tick; a read after the data was reused raises)."""
-        self.data  # noqa: B018 -- the ownership check
-        return self._mass_matrix
+        return self.fields.mass_matrix
 
     @property
     def bias_forces(self) -> np.ndarray:
         """``h = C(q, v) v + g(q)`` (nv): a view of the pass's data, like :attr:`mass_matrix`."""
-        self.data  # noqa: B018 -- the ownership check
-        return self._bias_forces
+        return self.fields.bias_forces
 
     @property
     def data(self) -> pin.Data:
@@ -129,6 +157,13 @@ class RobotState:
             raise DGraphError("a RobotState was read after its Pinocchio data was reused for another (q, v): "
                               "keep the values you need (e.g. com.position), not the state")
         return data
+
+    @property
+    def fields(self) -> DataFields:
+        """The views of the data's fields (valid while the data is this state's, like :attr:`mass_matrix`),
+        with the ownership check of :attr:`data`."""
+        self.data  # noqa: B018 -- the ownership check
+        return self._fields
 
     # -- whole body -------------------------------------------------------------------------
     @computed_once
@@ -148,26 +183,27 @@ class RobotState:
     def com(self) -> CenterOfMassKinematics:
         """Position, velocity, Jacobian and drift of the centre of mass (the drift from
         ``centerOfMass`` at the acceleration level on the pass's accelerations at ``a = 0``)."""
-        data = self.data
-        position = pin.centerOfMass(self.model, data, pin.KinematicLevel.ACCELERATION, False)  # a copy
-        return CenterOfMassKinematics(*(_read_only(a) for a in (position, data.vcom[0].copy(), data.Jcom.copy(),
-                                                                 data.acom[0].copy())))
+        fields = self.fields
+        position = pin.centerOfMass(self.model, fields.data, pin.KinematicLevel.ACCELERATION, False)  # a copy
+        return CenterOfMassKinematics(_read_only(position), _read_only(fields.com_velocity.copy()),
+                                      _read_only(fields.com_jacobian.copy()),
+                                      _read_only(fields.com_acceleration.copy()))
 
     @computed_once
     def centroidal_momentum_matrix(self) -> np.ndarray:
         """``A_G`` (6 x nv): ``h_G = [l, k] = A_G v`` at the CoM, world axes."""
-        return _read_only(self.data.Ag.copy())
+        return _read_only(self.fields.momentum_matrix.copy())
 
     @computed_once
     def centroidal_momentum(self) -> np.ndarray:
         """``h_G = [l, k]`` (linear, angular) at the CoM."""
-        return _read_only(self.data.Ag @ self.v)
+        return _read_only(self.fields.momentum_matrix @ self.v)
 
     @computed_once
     def centroidal_drift(self) -> np.ndarray:
         """``A_G_dot v``: the momentum rate at ``a = 0`` (``h_G_dot = A_G a + A_G_dot v``), with
         the pass's ``dA_G``."""
-        return _read_only(self.data.dAg @ self.v)
+        return _read_only(self.fields.momentum_matrix_rate @ self.v)
 
     def gravity_torque(self) -> np.ndarray:
         """``g(q)``, the generalized gravity (used by fallbacks; computed on request)."""
@@ -219,7 +255,7 @@ class RobotState:
 def _read_only(array: np.ndarray) -> np.ndarray:
     """``array``, made read-only: it is shared by every reader of the tick (or is a view of
     Pinocchio's data), and a reader writing into it would change what the others read."""
-    array.flags.writeable = False
+    array.setflags(write=False)  # a method call: half the cost of setting flags.writeable
     return array
 
 
