@@ -19,8 +19,10 @@ def half_sitting() -> np.ndarray:
     return load_model("talos").referenceConfigurations["half_sitting"].copy()
 
 
-def build(q: np.ndarray | None = None, v: np.ndarray | None = None, **solver_params) -> dg.Graph:
-    """Robot state set as constants; CoM held at its half-sitting position; two feet in contact."""
+def build(q: np.ndarray | None = None, v: np.ndarray | None = None, contact_forces: str = "corners",
+          **solver_params) -> dg.Graph:
+    """Robot state set as constants; CoM held at its half-sitting position; two feet in contact
+    (Contact6d with ``forces=contact_forces``)."""
     g = dg.Graph(dt=0.001, name="talos_id_test")
     robot = g.add(RobotModel("robot", frames=["left_sole_link"]))
     model = robot.pin_model
@@ -44,7 +46,7 @@ def build(q: np.ndarray | None = None, v: np.ndarray | None = None, **solver_par
     for name in TASKS:
         g.plug(f"{name.removesuffix('_task')}.feature", f"{name}.feature")
     for side in ("left", "right"):
-        contact = g.add(Contact6d(f"{side}_foot", frame=f"{side}_sole_link"))
+        contact = g.add(Contact6d(f"{side}_foot", frame=f"{side}_sole_link", forces=contact_forces))
         contact.kp.set(30.0)
         contact.kd.set(2 * np.sqrt(30.0))
         g.plug("robot.state", f"{side}_foot.robot")

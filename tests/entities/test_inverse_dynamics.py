@@ -75,17 +75,42 @@ def test_the_default_tolerance_moves_the_torques_by_less_than_a_millinewton_metr
     assert dynamics_residual(graph) < 1e-6
 
 
-def test_standing_still_forces_carry_the_weight_and_the_cop_is_inside_the_soles():
-    graph = build()
+@pytest.mark.parametrize("contact_forces", ["wrench", "corners"])
+def test_standing_still_forces_carry_the_weight_and_the_cop_is_inside_the_soles(contact_forces):
+    graph = build(contact_forces=contact_forces)
     solver = graph["solver"]
     weight = graph["robot"].state(0).total_mass * 9.81
     assert solver.normal_force_total(0) == pytest.approx(weight, rel=1e-4)
+    inscribed = 0.3 / np.sqrt(2)
     for contact, forces in zip(solver.solution(0).contacts, solver.solution(0).forces):
-        corners = forces.reshape(4, 3)
-        assert (corners[:, 2] >= -1e-6).all()  # unilateral corners: CoP inside the sole
-        assert (np.abs(corners[:, :2]) <= 0.3 / np.sqrt(2) * corners[:, 2:3] + 1e-6).all()
+        if contact_forces == "corners":
+            corners = forces.reshape(4, 3)
+            assert (corners[:, 2] >= -1e-6).all()  # unilateral corners: CoP inside the sole
+            assert (np.abs(corners[:, :2]) <= inscribed * corners[:, 2:3] + 1e-6).all()
+        else:  # the sole's wrench, contact frame: friction and a CoP inside the sole (0.10 front, 0.11 back)
+            force, torque = forces[:3], forces[3:]
+            assert force[2] > 0 and (np.abs(force[:2]) <= inscribed * force[2] + 1e-6).all()
+            cop = np.array([-torque[1], torque[0]]) / force[2]
+            assert -0.11 <= cop[0] <= 0.10 and abs(cop[1]) <= 0.069
     assert np.abs(solver.acceleration(0)).max() < 0.1  # holding still: small accelerations
     assert not solver.torque_limited(0)  # far from every limit: one solve, without the limit rows
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_soles_wrench_and_its_corner_forces_give_the_same_optimum(seed):
+    """The wrench cone bounds exactly what the corners can exert and the metric is the least
+    corner-force norm, so where no corner pyramid binds the two QPs have the same optimum: the
+    same accelerations, torques and wrenches, to the solver's tolerance. (Where one binds, the
+    corner QP also pays for the forces that move the corners back into their pyramids, the
+    wrench QP does not: tau then differs by ~1 N m at these states with 10x the velocity.)"""
+    q, v = perturbed_state(seed)
+    wrench, corners = (build(q, 0.1 * v, contact_forces=mode, eps_abs=1e-9)["solver"] for mode in ("wrench", "corners"))
+    assert wrench.solution(0).status == corners.solution(0).status == SOLVED
+    assert len(wrench.solution(0).forces[0]) == 6 and len(corners.solution(0).forces[0]) == 12
+    assert not np.abs(next(iter(corners._qp._workspaces.values())).free.latest[2]).max() > 1e-8  # no row binds
+    np.testing.assert_allclose(wrench.acceleration(0), corners.acceleration(0), atol=1e-8)
+    np.testing.assert_allclose(wrench.tau(0), corners.tau(0), atol=1e-4)
+    np.testing.assert_allclose(wrench.contact_wrenches(0), corners.contact_wrenches(0), atol=1e-4)
 
 
 def test_torque_limits_hold_when_a_task_asks_for_more():
@@ -295,7 +320,8 @@ def test_the_cost_is_the_same_whether_a_task_is_steady_or_moving():
 def test_the_finiteness_check_stays_below_openblas_threading():
     """OpenBLAS runs a dot product of more than 10,000 numbers on several threads; on a busy
     2-vCPU machine that stalled 1 tick in 40 of the push scenario for milliseconds. The check of
-    the problem's buffer goes in chunks below that size, and still sees a NaN anywhere."""
+    the problem's buffer goes in chunks below that size, and still sees a NaN anywhere (corner
+    forces: the larger problem)."""
     graph = build()
     solver = graph["solver"]
     assert solver.status(0) == SOLVED

@@ -16,8 +16,9 @@ class ContactConstraint:
     - forces: ``f`` (k) produce the contact wrench ``force_generator f`` (6, contact frame),
       hence the generalized force ``jacobian^T force_generator f``;
     - friction and normal-force bounds: ``friction_lower <= friction_matrix f <= friction_upper``;
-    - ``force_weight``: the cost ``force_weight ||f - force_reference||^2`` (``force_reference``
-      None: 0, a regularisation; a force task sets it, thesis Eq. 4.12);
+    - ``force_weight``: the cost ``force_weight ||f - force_reference||_M^2`` (``force_reference``
+      None: 0, a regularisation; a force task sets it, thesis Eq. 4.12), in the metric
+      ``force_metric`` (``M``, k x k, symmetric positive definite; None: the identity);
     - ``rotation``: the contact frame's orientation in the world (to report world wrenches);
     - ``error``: the contact's placement error that ``motion_rhs`` corrects.
     """
@@ -34,6 +35,7 @@ class ContactConstraint:
     rotation: np.ndarray
     error: np.ndarray
     force_reference: np.ndarray | None = None
+    force_metric: np.ndarray | None = None
 
     @property
     def n_forces(self) -> int:

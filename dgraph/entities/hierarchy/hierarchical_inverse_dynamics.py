@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 
 import dgraph as dg
 from dgraph.entities.contacts.constraint import ContactConstraint
@@ -31,7 +32,7 @@ class HierarchicalInverseDynamics(StackCommands, InverseDynamicsSolver):
     1. … the levels of ``stack``: each task's rows ``sqrt(w) (A a - b)`` (weights act within
        a level only; a level never trades against another);
     last: the regularisation of the weighted QP as a level of its own,
-       ``min acceleration_weight ||a||^2 + sum_c force_weight_c ||f_c||^2``.
+       ``min acceleration_weight ||a||^2 + sum_c force_weight_c ||f_c||^2_{M_c}`` (each contact's force metric).
 
     ``tau = M_j a + h_j - (J_c^T T)_j f`` (Eq. 2.4). If the fixed constraints cannot all hold
     (their residual exceeds ``constraint_tolerance``) ``status`` is 2 (primal infeasible); a
@@ -70,15 +71,19 @@ class HierarchicalInverseDynamics(StackCommands, InverseDynamicsSolver):
         self._regularisations: dict[tuple[object, ...], Level] = {}
 
     def _regularisation(self, contacts: list[ContactConstraint]) -> Level:
-        """``diag(sqrt(w)) y = 0``: the weighted QP's regularisation as the last level."""
-        key = tuple((c.name, c.n_forces, c.force_weight) for c in contacts)
+        """``R y = 0`` with ``R^T R`` the weighted QP's regularisation (``eps I`` on ``a``,
+        ``w_c M_c`` on each contact's forces) as the last level."""
+        key = tuple((c.name, c.n_forces, c.force_weight, None if c.force_metric is None else c.force_metric.tobytes())
+                    for c in contacts)
         level = self._regularisations.get(key)
         if level is None:
-            weights = np.concatenate([np.full(self.nv, self.acceleration_weight),
-                                      *[np.full(c.n_forces, c.force_weight) for c in contacts]])
-            n = len(weights)
-            level = Level(("regularisation", key), np.diag(np.sqrt(weights)), np.zeros(n), np.zeros((0, n)),
-                          np.zeros(0), np.zeros(0))
+            blocks = [np.sqrt(self.acceleration_weight) * np.eye(self.nv)]
+            for c in contacts:
+                metric = np.eye(c.n_forces) if c.force_metric is None else c.force_metric
+                blocks.append(np.sqrt(c.force_weight) * np.linalg.cholesky(metric).T)  # U^T U = M
+            matrix = scipy.linalg.block_diag(*blocks)
+            n = len(matrix)
+            level = Level(("regularisation", key), matrix, np.zeros(n), np.zeros((0, n)), np.zeros(0), np.zeros(0))
             self._regularisations[key] = level
         return level
 

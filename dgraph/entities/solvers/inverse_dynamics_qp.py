@@ -9,7 +9,7 @@ this with ``tau`` kept as variables (94 instead of 62 variables for TALOS on two
 solve takes 1.9 times as long, docs/control.md).
 
 ```
-min  sum_i ||A_i a - s b_i||^2_{W_i} + sum_c w_c ||f_c - s f*_c||^2 + eps ||a||^2
+min  sum_i ||A_i a - s b_i||^2_{W_i} + sum_c w_c ||f_c - s f*_c||^2_{M_c} + eps ||a||^2
 s.t. M_u a - (J_c^T T)_u f = -h_u                         floating-base dynamics
      J_c a = rhs_c                                         each active contact
      l_c <= C_c f_c <= u_c                                 friction pyramids, normal force
@@ -17,7 +17,8 @@ s.t. M_u a - (J_c^T T)_u f = -h_u                         floating-base dynamics
      tau_min - h_j <= M_j a - (J_c^T T)_j f <= tau_max - h_j   torque limits (when one binds)
 ```
 
-``f*_c`` is a contact's force reference (a force task's, thesis Eq. 4.12; 0 otherwise). The
+``f*_c`` is a contact's force reference (a force task's, thesis Eq. 4.12; 0 otherwise), ``M_c``
+its force metric (the identity, or for a sole's 6D wrench the least corner-force norm). The
 passive mode of thesis Eq. 5.34 scales every task vector and force reference by
 ``s = beta gamma`` (Eq. 5.24) and adds the passivity row, ``-v_j^T tau >= H_dot`` with
 ``tau = M_j a + h_j - (J_c^T T)_j f``; with ``s = 1`` and no bound the problem is the plain one,
@@ -64,12 +65,13 @@ docs/benchmarks.md, ``tests/entities/test_inverse_dynamics.py``)."""
 
 SOLVED, MAX_ITERATIONS, PRIMAL_INFEASIBLE, DUAL_INFEASIBLE, NOT_FINITE, NOT_SOLVED = range(6)
 STATUS_NAMES = ("solved", "max_iterations", "primal_infeasible", "dual_infeasible", "not_finite", "not_solved")
-_PROXQP_STATUS = {
-    "PROXQP_SOLVED": SOLVED,
-    "PROXQP_MAX_ITER_REACHED": MAX_ITERATIONS,
-    "PROXQP_PRIMAL_INFEASIBLE": PRIMAL_INFEASIBLE,
-    "PROXQP_DUAL_INFEASIBLE": DUAL_INFEASIBLE,
-}
+_PROXQP_STATUS = {getattr(proxsuite.proxqp.QPSolverOutput, name): status for name, status in (
+    ("PROXQP_SOLVED", SOLVED),
+    ("PROXQP_MAX_ITER_REACHED", MAX_ITERATIONS),
+    ("PROXQP_PRIMAL_INFEASIBLE", PRIMAL_INFEASIBLE),
+    ("PROXQP_DUAL_INFEASIBLE", DUAL_INFEASIBLE),
+)}
+"""Our status code of each ProxQP status (by the enum itself: reading its name costs more)."""
 
 
 FINITE_CHUNK = 8192
@@ -82,7 +84,7 @@ microseconds of wrapping)."""
 def proxqp_status(results: object) -> int:
     """The module's status code for ProxQP ``results`` (``NOT_FINITE`` for a "solved" answer
     with non-finite entries)."""
-    status = _PROXQP_STATUS.get(results.info.status.name, NOT_SOLVED)
+    status = _PROXQP_STATUS.get(results.info.status, NOT_SOLVED)
     if status == SOLVED and not math.isfinite(np.vdot(results.x, results.x)):
         return NOT_FINITE
     return status
@@ -312,6 +314,7 @@ class _ContactBlock:
             ws.upper[friction]
         self.written: tuple[object, ...] = ()  # the constant arrays last written
         self.negated_generator = -contact.force_generator
+        self.reference_metric: np.ndarray | None = None  # -2 w_c M, when the contact has a metric
         self.force_reference = False  # a force reference was written into the gradient
 
     def write_constant_rows(self, contact: ContactConstraint) -> None:
@@ -320,10 +323,12 @@ class _ContactBlock:
         self.friction[...] = contact.friction_matrix
         self.friction_lower[...] = np.maximum(contact.friction_lower, -INFINITY)
         self.friction_upper[...] = np.minimum(contact.friction_upper, INFINITY)
-        self.force_hessian[...] = np.diag(np.full(contact.n_forces, 2.0 * contact.force_weight))
+        metric = np.eye(contact.n_forces) if contact.force_metric is None else contact.force_metric
+        np.multiply(metric, 2.0 * contact.force_weight, out=self.force_hessian)
+        self.reference_metric = None if contact.force_metric is None else -2.0 * contact.force_weight * metric
         self.negated_generator = -contact.force_generator
         self.written = (contact.friction_matrix, contact.friction_lower, contact.friction_upper,
-                        contact.force_weight, contact.force_generator)
+                        contact.force_weight, contact.force_generator, contact.force_metric)
 
     def write(self, contact: ContactConstraint, scale: float) -> bool:
         """The contact's columns of the dynamics and torque rows, its motion rows and its force
@@ -331,7 +336,7 @@ class _ContactBlock:
         written = self.written
         rewritten = (contact.friction_matrix is not written[0] or contact.friction_lower is not written[1]
                      or contact.friction_upper is not written[2] or contact.force_weight != written[3]
-                     or contact.force_generator is not written[4])
+                     or contact.force_generator is not written[4] or contact.force_metric is not written[5])
         if rewritten:
             self.write_constant_rows(contact)
         np.dot(contact.jacobian.T, self.negated_generator, out=self.generalized)
@@ -339,8 +344,12 @@ class _ContactBlock:
         self.torque[...] = self.joint_part
         self.motion_matrix[...] = contact.jacobian
         self.motion_rhs[...] = contact.motion_rhs
-        if contact.force_reference is not None:
-            np.multiply(contact.force_reference, -2.0 * contact.force_weight * scale, out=self.force_gradient)
+        if contact.force_reference is not None:  # -2 w_c s M f*
+            if self.reference_metric is None:
+                np.multiply(contact.force_reference, -2.0 * contact.force_weight * scale, out=self.force_gradient)
+            else:
+                np.dot(self.reference_metric, contact.force_reference, out=self.force_gradient)
+                self.force_gradient *= scale
             self.force_reference = True
         elif self.force_reference:
             self.force_gradient.fill(0.0)

@@ -113,12 +113,19 @@ def test_zero_scale_zeroes_every_task_vector_and_force_reference():
     ws = qp.assemble(state.mass_matrix, state.bias_forces, tasks, contacts, Passivity(0.0, None, state.v))
     assert not ws.g.any()
     # a contact with a force reference (a force task): its reference is scaled too
-    pushing = dataclasses.replace(contacts[0], name="pushing", force_reference=np.full(12, 5.0))
-    for scale in (1.0, 0.5, 0.0):
-        ws = qp.assemble(state.mass_matrix, state.bias_forces, tasks, [pushing, contacts[1]],
-                         Passivity(scale, None, state.v))
-        forces = slice(qp.nv, qp.nv + 12)
-        np.testing.assert_allclose(ws.g[forces], -2.0 * pushing.force_weight * scale * 5.0)
+    # (in the contact's force metric M, when it has one: the gradient is -2 w s M f*)
+    k = contacts[0].n_forces
+    pushing = dataclasses.replace(contacts[0], name="pushing", force_reference=np.full(k, 5.0))
+    metric = np.diag(np.arange(1.0, k + 1.0)) + 0.1
+    for contact, gradient in ((pushing, np.full(k, 5.0)), (dataclasses.replace(pushing, force_metric=metric),
+                                                            metric @ np.full(k, 5.0))):
+        for scale in (1.0, 0.5, 0.0):
+            ws = qp.assemble(state.mass_matrix, state.bias_forces, tasks, [contact, contacts[1]],
+                             Passivity(scale, None, state.v))
+            forces = slice(qp.nv, qp.nv + k)
+            np.testing.assert_allclose(ws.g[forces], -2.0 * contact.force_weight * scale * gradient)
+            np.testing.assert_allclose(ws.H[forces, forces], 2.0 * contact.force_weight * (
+                np.eye(k) if contact.force_metric is None else metric))
 
 
 def test_tank_bookkeeping_adds_up_and_stays_in_its_bounds():

@@ -12,9 +12,9 @@ from tests.entities.talos_graph import CONTACTS, TASKS, build
 from tests.entities.test_inverse_dynamics import perturbed_state
 
 
-def hierarchical(seed=None, tasks=("com_task", "waist_task", "posture_task")):
+def hierarchical(seed=None, tasks=("com_task", "waist_task", "posture_task"), contact_forces="corners"):
     q, v = perturbed_state(seed) if seed is not None else (None, None)
-    g = build(q, v)
+    g = build(q, v, contact_forces=contact_forces)
     g.add(HierarchicalInverseDynamics("hsolver", tasks=list(TASKS), contacts=list(CONTACTS)))
     g.plug("robot.state", "hsolver.robot")
     for name in TASKS:
@@ -26,9 +26,11 @@ def hierarchical(seed=None, tasks=("com_task", "waist_task", "posture_task")):
     return g, solver
 
 
-@pytest.mark.parametrize("seed", [None, 0, 1])
-def test_dynamics_contacts_friction_and_limits_hold(seed):
-    g, solver = hierarchical(seed)
+@pytest.mark.parametrize(("seed", "contact_forces"), [(None, "corners"), (0, "corners"), (1, "corners"),
+                                                     (None, "wrench"), (0, "wrench")])
+def test_dynamics_contacts_friction_and_limits_hold(seed, contact_forces):
+    """Also with the soles' wrenches as variables (their regularisation level in the corner-force metric)."""
+    g, solver = hierarchical(seed, contact_forces=contact_forces)
     solution = solver.solution(0)
     assert solution.status == SOLVED
     state = g["robot"].state(0)
