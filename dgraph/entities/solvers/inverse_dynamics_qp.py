@@ -458,7 +458,7 @@ class InverseDynamicsQP:
         if tick is None or tick != self._tasks_tick:
             previous = self._previous_tasks
             arrays = [(task.matrix, task.weight) for task in tasks]
-            self._steady = tuple(a[0] is b[0] and a[1] is b[1] for a, b in zip(arrays, previous, strict=False)) \
+            self._steady = tuple([a[0] is b[0] and a[1] is b[1] for a, b in zip(arrays, previous, strict=True)]) \
                 if len(previous) == len(arrays) else (False,) * len(arrays)
             self._previous_tasks, self._tasks_tick = arrays, tick
         steady = self._steady if len(self._steady) == len(tasks) else (False,) * len(tasks)
