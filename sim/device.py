@@ -1,14 +1,15 @@
 """The MuJoCo device entity: a TALOS (or another robot of :mod:`sim.robots`) simulated by MuJoCo.
 
 One tick ``t -> t + 1`` (``prepare_state(t)``): read ``control(t)`` (and the wrench inputs),
-compute the joint torques, save the MuJoCo integration state (``mj_getState``), finish the step
-with ``mj_step2`` (actuation, acceleration, contacts, acceleration-stage sensors, integration),
-then ``mj_step1`` at the new state (kinematics, position/velocity sensors), check for divergence
-and stage every state (``fallen`` only when it changes, so its ``time`` is the tick of the
-change). ``commit_state(t + 1)`` publishes them and cannot fail. Calling
-``mj_step2`` then ``mj_step1`` is the same sequence of computations as ``mj_step`` (split at a
-different place), so positions, velocities, gyro and orientation at ``t + 1`` are those of the
-new state without an extra ``mj_forward``.
+compute the joint torques, save the MuJoCo integration state (``mj_getState``, without the applied
+forces, which a step does not change), finish the step with ``mj_step2`` (actuation,
+acceleration, contacts, acceleration-stage sensors, integration), then ``mj_step1`` at the new
+state (kinematics, position/velocity sensors), check for divergence and stage every state
+(``fallen`` only when it changes, so its ``time`` is the tick of the change).
+``commit_state(t + 1)`` publishes them and cannot fail. Calling ``mj_step2`` then ``mj_step1``
+is the same sequence of computations as ``mj_step`` (split at a different place), so positions,
+velocities, gyro and orientation at ``t + 1`` are those of the new state without an extra
+``mj_forward``.
 
 If a tick fails after MuJoCo stepped (another entity raised before the commit, or this device
 detected a fall or a divergence), the next ``prepare_state`` restores the saved state first, so a
@@ -36,9 +37,17 @@ from sim.model import SimModel, load
 from sim.robots import ROBOTS
 from sim.scenes import SCENES
 
-_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+_STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION) & ~int(mujoco.mjtState.mjSTATE_QFRC_APPLIED
+                                                          | mujoco.mjtState.mjSTATE_XFRC_APPLIED)
+"""What ``mj_getState`` saves before a step: the integration state without the applied forces,
+which neither MuJoCo's step nor this device changes (``qfrc_applied`` is never written,
+``xfrc_applied`` only in the rows of the wrench bodies, rewritten at every tick before the step),
+so restoring without them is exact; they are two thirds of the integration state on TALOS."""
 _BAD_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
                  mujoco.mjtWarning.mjWARN_BADQACC)
+_BAD_WARNING_SLICE = slice(int(_BAD_WARNINGS[0]), int(_BAD_WARNINGS[-1]) + 1)
+"""The bad qpos/qvel/qacc warnings are consecutive in ``mjtWarning``: one slice of ``warning.number``."""
+assert [int(w) for w in _BAD_WARNINGS] == list(range(_BAD_WARNING_SLICE.start, _BAD_WARNING_SLICE.stop))
 FT_SENSORS = ("left_ankle", "right_ankle", "left_wrist", "right_wrist")
 
 
@@ -202,17 +211,25 @@ class MujocoDevice(dg.Device):
         self._sensor_index = np.concatenate([
             sensors.imu_quat + np.array([1, 2, 3, 0]), sensors.imu_gyro + np.arange(3),
             sensors.imu_accelerometer + np.arange(3), start + np.arange(6 * len(FT_SENSORS))])
-        self._ft_parts = [(state, slice(10 + 6 * i, 16 + 6 * i)) for i, state in enumerate(self._ft_states)]
+        # MuJoCo reports the wrench the parent exerts on the child subtree: the F/T block is negated
+        self._sensor_sign = np.ones(len(self._sensor_index))
+        self._sensor_sign[10:] = -1.0
+        # the states that are parts of the gathered sensors: IMU orientation, gyro, accelerometer, F/T
+        self._sensor_parts = [(self.imu_orientation, slice(0, 4)), (self.imu_angular_velocity, slice(4, 7)),
+                              (self.imu_linear_acceleration, slice(7, 10)),
+                              *[(state, slice(10 + 6 * i, 16 + 6 * i)) for i, state in enumerate(self._ft_states)]]
         self._base_z = int(self.joint_map.qpos_index[2])
         # views on the MjData buffers (fixed for its lifetime; mj_setState writes into them)
         d = self.data
         self._qpos, self._qvel, self._ctrl, self._xfrc = d.qpos, d.qvel, d.ctrl, d.xfrc_applied
         self._sensordata, self._actuator_force = d.sensordata, d.actuator_force
-        self._warning_numbers, self._bad_warnings = d.warning.number, np.array([int(w) for w in _BAD_WARNINGS])
+        self._bad_warning_counts = d.warning.number[_BAD_WARNING_SLICE]  # a view
         # R_WB^T (the base's xmat, transposed): MuJoCo sets a free body's orientation from its
         # qpos quaternion (normalised) in mj_kinematics, which mj_step1 and mj_forward run
         self._base_rt = d.xmat[jm.base_body].reshape(3, 3).T
         self._qpos_index, self._qvel_index = jm.qpos_index, jm.qvel_index
+        base_linear = int(jm.qvel_index[0])  # the free joint's linear velocity (world frame): qvel[i:i + 3]
+        self._qvel_base_linear = d.qvel[base_linear:base_linear + 3]
         bodies = self.sim.robot_bodies  # a slice
         self._cfrc_robot = d.cfrc_ext[bodies, 3:]
         self._xfrc_robot = d.xfrc_applied[bodies, :3]
@@ -262,28 +279,32 @@ class MujocoDevice(dg.Device):
         return [s for s in self.ports.values() if isinstance(s, dg.State)]
 
     # -- the tick ---------------------------------------------------------------------------
-    def _torque(self, t: int) -> tuple[np.ndarray, bool]:
+    def _torque(self, t: int) -> tuple[np.ndarray | None, bool]:
         """Joint torques (actuated order, before clipping) for the step ``t -> t + 1``, and whether
         the command at ``t`` was replaced: its torque was not finite (or so large that its square
         overflows, beyond 1e154), so the last valid command is applied instead (see the class
-        docstring). The command kept for the next ticks is committed with the state."""
+        docstring).
+
+        Torque mode, replaced: ``None``, MuJoCo's ``ctrl`` already holds that command. It holds the
+        torque applied at the last committed tick (zero after a reset: ``mj_resetData``), which is
+        a copy (a producer may reuse its buffer), is not changed by MuJoCo, and is saved with the
+        state, so a failed tick's torque is undone with it. Position mode keeps a copy of its last
+        valid command, committed with the state.
+        """
         if self._torque_mode:
-            command = tau = self.control(t)
-        else:
-            command = (self.control(t), self.feedforward_torque(t), self.velocity_reference(t))
-            tau = self._pd(command)
+            tau = self.control(t)
+            return (tau, False) if math.isfinite(np.dot(tau, tau)) else (None, True)
+        command = (self.control(t), self.feedforward_torque(t), self.velocity_reference(t))
+        tau = self._pd(command)
         if math.isfinite(np.dot(tau, tau)):  # kept as a copy: a producer may reuse its buffer
-            self._held_next = np.array(command, dtype=float) if self._torque_mode else tuple(
-                np.array(part, dtype=float) for part in command)
+            self._held_next = tuple(np.array(part, dtype=float) for part in command)
             return tau, False
         self._held_next = self._held if self._held is not None else self._hold_default()
-        return (self._held_next if self._torque_mode else self._pd(self._held_next)), True
+        return self._pd(self._held_next), True
 
-    def _hold_default(self) -> np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The command held when none was ever valid: zero torque, or (position mode) the joints
-        held where they are (target ``q_j(t)``, no velocity reference, no feed-forward)."""
-        if self._torque_mode:
-            return np.zeros(self.na)
+    def _hold_default(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Position mode, the command held when none was ever valid: the joints held where they
+        are (target ``q_j(t)``, no velocity reference, no feed-forward)."""
         return self.encoder_position.value, np.zeros(self.na), np.zeros(self.na)
 
     def _pd(self, command: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
@@ -309,10 +330,11 @@ class MujocoDevice(dg.Device):
         self._pending = True
         if self._removals is not None:
             self._removals.apply(d, t * dt)
-        if self._ctrl_identity:
-            self._ctrl[:] = tau
-        else:
-            np.take(tau, self._ctrl_index, out=self._ctrl)
+        if tau is not None:  # else (torque mode, command replaced) ctrl holds the last valid one
+            if self._ctrl_identity:
+                self._ctrl[:] = tau
+            else:
+                np.take(tau, self._ctrl_index, out=self._ctrl)
         for body, wrench in wrenches:
             self._xfrc[body] = wrench
         mujoco.mj_step2(m, d)
@@ -350,16 +372,22 @@ class MujocoDevice(dg.Device):
         self._pending = False
 
     def _sync_warnings(self) -> None:
-        self._warning_counts = self._warning_numbers[self._bad_warnings].tolist()
+        self._warning_counts = self._bad_warning_counts.tolist()
 
     def _check(self, t: int) -> None:
-        """Raise if MuJoCo diverged: non-finite state or a bad qpos/qvel/qacc warning."""
+        """Raise if MuJoCo diverged: a bad qpos/qvel/qacc warning since the last step.
+
+        The warnings cover a non-finite state: ``mj_step1``, the last thing to run on the new
+        state, starts by checking qpos and qvel (``mj_checkPos``, ``mj_checkVel``: NaN, inf or
+        beyond 1e10 count a warning and, unless disabled, reset the data). So the state is
+        finite whenever no count changed; it is looked at only to name the problem.
+        """
+        counts = self._bad_warning_counts.tolist()
+        if counts == self._warning_counts:
+            return
         qpos, qvel = self._qpos, self._qvel
-        counts = self._warning_numbers[self._bad_warnings].tolist()
         # NaN or inf make the squared norms non-finite (so do values beyond 1e154: diverged too)
         finite = math.isfinite(np.dot(qpos, qpos) + np.dot(qvel, qvel))
-        if finite and counts == self._warning_counts:
-            return
         problems = [f"{mujoco.mjtWarning(int(w)).name[7:]} (index {self.data.warning[int(w)].lastinfo})"
                     for w, n, n0 in zip(_BAD_WARNINGS, counts, self._warning_counts, strict=True) if n != n0]
         if not finite:
@@ -376,27 +404,21 @@ class MujocoDevice(dg.Device):
         tick of the change, like the estimator's contact flags. A few gathers with precomputed
         index arrays; the encoder and F/T states are views of them.
         """
-        qpos = self._qpos
-        q = qpos[self._qpos_index]                      # JointMap.q_from_qpos
-        v = self._qvel[self._qvel_index]                # JointMap.v_from_qvel: the base linear
-        v[:3] = self._base_rt.dot(v[:3])                # velocity to the base frame, R_WB^T v
-        sensors = self._sensordata[self._sensor_index]
-        ft = sensors[10:]
-        np.negative(ft, out=ft)  # MuJoCo reports the wrench the parent exerts on the child subtree
+        q = self._qpos[self._qpos_index]                                 # JointMap.q_from_qpos
+        v = self._qvel[self._qvel_index]                                 # JointMap.v_from_qvel: the base
+        np.dot(self._base_rt, self._qvel_base_linear, out=v[:3])         # linear velocity R_WB^T v
+        sensors = self._sensordata[self._sensor_index] * self._sensor_sign  # F/T negated
         # every array is this tick's own (a gather, or a view of one) and never written again: no copies
         self.q.stage(q, copy=False)
         self.v.stage(v, copy=False)
-        self.imu_orientation.stage(sensors[0:4], copy=False)
-        self.imu_angular_velocity.stage(sensors[4:7], copy=False)
-        self.imu_linear_acceleration.stage(sensors[7:10], copy=False)
         self.encoder_position.stage(q[7:], copy=False)
         self.encoder_velocity.stage(v[6:], copy=False)
-        for state, part in self._ft_parts:
+        for state, part in self._sensor_parts:
             state.stage(sensors[part], copy=False)
         self.joint_torque.stage(self._actuator_force[self._actuated_index], copy=False)
         self.contact_force_total.stage(contact_force, copy=False)
         self.sim_time.stage(self.data.time)
-        fallen = bool(qpos[self._base_z] < self.fall_height)
+        fallen = q.item(2) < self.fall_height  # the base height, qpos[self._base_z]
         self._fallen_staged = everything or fallen != self.fallen.value
         if self._fallen_staged:
             self.fallen.stage(fallen)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -178,6 +179,40 @@ def test_divergence_raises_and_keeps_the_state():
         g.step()
     assert g.t == 6 and dev.control_fault.value == 0
 
+
+
+def test_a_diverged_state_is_named_by_mujocos_own_checks_even_without_its_reset():
+    """The device's check reads MuJoCo's bad qpos/qvel/qacc warnings (``mj_step1`` starts by checking
+    the new qpos and qvel); with MuJoCo's reset off, the state stays diverged and is named too."""
+    g = dg.Graph(dt=0.001)
+    dev = g.add(MujocoDevice("sim", wrench_bodies=["base_link"]))
+    dev.control.set(np.zeros(32))
+    dev.mj_model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
+    g.run(ticks=3)
+    dev.wrench_base_link.set([1e300, 0.0, 0.0, 0.0, 0.0, 0.0])
+    with pytest.raises(dg.DGraphError, match=r"diverged at tick 3: BADQPOS .*BADQACC .*non-finite qpos/qvel"):
+        g.step()
+    assert g.t == 3
+
+
+def test_a_failed_tick_with_another_wrench_resumes_as_if_it_never_ran():
+    """The state saved before a step leaves out the applied forces: the resumed tick rewrites the
+    wrench of the failed one."""
+    runs = []
+    for fail in (False, True):
+        g, dev = standing_graph(wrench_bodies=["base_link", "arm_left_7_link"])
+        dev.wrench_base_link.set([0.0, 40.0, 0.0, 0.0, 0.0, 5.0])
+        g.run(ticks=100)
+        if fail:
+            g.add(FailOnce("fail", at=100))
+            dev.wrench_arm_left_7_link.set([0.0, 0.0, 300.0, 0.0, 0.0, 0.0])
+            with pytest.raises(RuntimeError, match="boom"):
+                g.step()
+        dev.wrench_arm_left_7_link.set(np.zeros(6))
+        g.run(ticks=100)
+        runs.append({name: np.array(s.value) for name, s in dev.outputs.items()})
+    for name, value in runs[0].items():
+        np.testing.assert_array_equal(runs[1][name], value, err_msg=name)
 
 class Commands(dg.Entity):
     """A test source: row ``t`` of ``rows`` (NaN allowed: the graph's value checks are off), or
