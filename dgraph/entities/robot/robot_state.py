@@ -150,20 +150,24 @@ class RobotState:
         """The Pinocchio data of this pass. It is shared: a later pass on another ``(q, v)``
         overwrites it, after which computing anything more from this state raises instead of
         answering for the other state (values already computed are this state's and stay valid)."""
-        data = self._pin_data
-        owner = _OWNERS[self._key]()
-        if owner is not self and (owner is None or not (
-                np.array_equal(owner.q, self.q) and np.array_equal(owner.v, self.v))):
-            raise DGraphError("a RobotState was read after its Pinocchio data was reused for another (q, v): "
-                              "keep the values you need (e.g. com.position), not the state")
-        return data
+        if _OWNERS[self._key]() is not self:
+            self._check_not_reused()
+        return self._pin_data
 
     @property
     def fields(self) -> DataFields:
         """The views of the data's fields (valid while the data is this state's, like :attr:`mass_matrix`),
         with the ownership check of :attr:`data`."""
-        self.data  # noqa: B018 -- the ownership check
+        if _OWNERS[self._key]() is not self:
+            self._check_not_reused()
         return self._fields
+
+    def _check_not_reused(self) -> None:
+        """For a state whose data a later pass filled: raise unless that pass was at the same ``(q, v)``."""
+        owner = _OWNERS[self._key]()
+        if owner is None or not (np.array_equal(owner.q, self.q) and np.array_equal(owner.v, self.v)):
+            raise DGraphError("a RobotState was read after its Pinocchio data was reused for another (q, v): "
+                              "keep the values you need (e.g. com.position), not the state")
 
     # -- whole body -------------------------------------------------------------------------
     @computed_once
