@@ -17,6 +17,9 @@ from dgraph.entities.estimators.leg_odometry import (
 from dgraph.entities.robot.robot_state import load_model
 from dgraph.entities.robot.rotations import matrix_to_quat, quat_to_rows
 
+_HEAD = 9
+"""The floats before ``q`` in the estimate's array: ``x(t + 1)``, ``p~(t + 1)`` (the prediction state), ``v_WB``."""
+
 
 class Estimate:
     """Everything computed at one tick (the ``estimate`` output); read-only for readers."""
@@ -201,8 +204,9 @@ class FloatingBaseEstimator(dg.Entity):
         else:
             v_i = self.prediction(t)[:3].tolist()
         values = self._values(t, dt, q_j, qd_j, r_wi, r_wb, w_b, u_i, p_wb, v_i)                        # (6), (7)
-        nq, end = self.nq, self.nq + self.nv
-        return Estimate(values[:nq], values[nq:end], contacts, anchored, anchors, values[end + 6:], values[end:end + 6])
+        v_start = _HEAD + self.nq
+        return Estimate(values[_HEAD:v_start], values[v_start:], contacts, anchored, anchors, values[6:_HEAD],
+                        values[:6])
 
     def _position(self, t: int, r_wb: tuple[float, ...], frames: list[list[float]], forces: list[float],
                   contacts: list[bool], anchored: list[bool]) -> tuple[list[float], list[np.ndarray | None]]:
@@ -263,24 +267,26 @@ class FloatingBaseEstimator(dg.Entity):
     def _values(self, t: int, dt: float, q_j: np.ndarray, qd_j: np.ndarray, r_wi: list[list[float]],
                 r_wb: tuple[float, ...], w_b: list[float], u_i: list[float], p_wb: list[float],
                 v_i: list[float]) -> np.ndarray:
-        """One array ``[q, v, x(t + 1), p~(t + 1), v_WB]``: (7), the next states of (6) and the tick
-        transition, with ``v_WB = v_I - R_WB u_I``, ``R_WB^T v_WB = R_WB^T v_I - u_I``."""
+        """One array ``[x(t + 1), p~(t + 1), v_WB, q, v]``: the next states of (6) and the tick
+        transition, with ``v_WB = v_I - R_WB u_I``, and (7) with ``R_WB^T v_WB = R_WB^T v_I - u_I``.
+        Four writes: the floats up to the base of ``q`` (one run), the joints of ``q``, the base of
+        ``v``, its joints."""
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = r_wb
         (e00, e01, e02), (e10, e11, e12), (e20, e21, e22) = r_wi
         (u0, u1, u2), (v0, v1, v2), (p0, p1, p2), (g0, g1, g2) = u_i, v_i, p_wb, self._gravity
         a0, a1, a2 = self.imu_linear_acceleration(t).tolist()
         b0, b1, b2 = v0 - (r00 * u0 + r01 * u1 + r02 * u2), v1 - (r10 * u0 + r11 * u1 + r12 * u2), \
             v2 - (r20 * u0 + r21 * u1 + r22 * u2)
-        nq = self.nq
-        values = np.empty(nq + self.nv + 9)
-        values[:7] = [p0, p1, p2, *matrix_to_quat(((r00, r01, r02), (r10, r11, r12), (r20, r21, r22)))]
-        values[7:nq] = q_j
-        values[nq:nq + 6] = [r00 * v0 + r10 * v1 + r20 * v2 - u0, r01 * v0 + r11 * v1 + r21 * v2 - u1,
-                             r02 * v0 + r12 * v1 + r22 * v2 - u2, *w_b]
-        values[nq + 6:-9] = qd_j
-        values[-9:] = [v0 + dt * (e00 * a0 + e01 * a1 + e02 * a2 + g0), v1 + dt * (e10 * a0 + e11 * a1 + e12 * a2 + g1),
-                       v2 + dt * (e20 * a0 + e21 * a1 + e22 * a2 + g2), p0 + dt * b0, p1 + dt * b1, p2 + dt * b2,
-                       b0, b1, b2]
+        v_start = _HEAD + self.nq
+        values = np.empty(v_start + self.nv)
+        values[:_HEAD + 7] = [
+            v0 + dt * (e00 * a0 + e01 * a1 + e02 * a2 + g0), v1 + dt * (e10 * a0 + e11 * a1 + e12 * a2 + g1),
+            v2 + dt * (e20 * a0 + e21 * a1 + e22 * a2 + g2), p0 + dt * b0, p1 + dt * b1, p2 + dt * b2, b0, b1, b2,
+            p0, p1, p2, *matrix_to_quat(((r00, r01, r02), (r10, r11, r12), (r20, r21, r22)))]
+        values[_HEAD + 7:v_start] = q_j
+        values[v_start:v_start + 6] = [r00 * v0 + r10 * v1 + r20 * v2 - u0, r01 * v0 + r11 * v1 + r21 * v2 - u1,
+                                       r02 * v0 + r12 * v1 + r22 * v2 - u2, *w_b]
+        values[v_start + 6:] = qd_j
         return values
 
     @dg.output(shape=("nq",), depends=("estimate",))
