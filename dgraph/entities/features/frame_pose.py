@@ -78,5 +78,5 @@ class FramePose(FrameReader, Feature):
         (both halves: all six rows)."""
         frame = state.frame(self.frame_index(state), WORLD)
         block = self._block
-        return FeatureValue(self._error(frame, t), frame.velocity[block] - self.reference_velocity(t)[block],
+        return FeatureValue(self._error(frame, t), (frame.velocity - self.reference_velocity(t))[block],
                             frame.jacobian[block], frame.drift[block], self.reference_acceleration(t)[block])
