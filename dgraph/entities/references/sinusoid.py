@@ -49,22 +49,24 @@ class Sinusoid(dg.Entity):
             self._sin, self._cos = math.sin, math.cos
         else:
             self._omega, self._phase, self._sin, self._cos = omega, phase, np.sin, np.cos
-        self._last: tuple[int, tuple[Any, Any, Any]] | None = None
+        self._last_tick: int | None = None  # the tick of _last_waves
+        self._last_waves: tuple[Any, Any, Any] = ()
 
     def _envelope(self, s: float) -> tuple[float, float, float]:
         """``e, e_dot, e_ddot`` of the fade-in at time ``s``."""
-        if self.ramp <= 0.0 or s >= self.ramp:
+        ramp = self.ramp
+        if ramp <= 0.0 or s >= ramp:
             return 1.0, 0.0, 0.0
-        x = max(s, 0.0) / self.ramp
-        return (x**3 * (10 - 15 * x + 6 * x * x), 30 * x * x * (1 - x) ** 2 / self.ramp,
-                60 * x * (1 - x) * (1 - 2 * x) / self.ramp**2)
+        x = max(s, 0.0) / ramp
+        return (x**3 * (10 - 15 * x + 6 * x * x), 30 * x * x * (1 - x) ** 2 / ramp,
+                60 * x * (1 - x) * (1 - 2 * x) / ramp**2)
 
     def _waves(self, t: int) -> tuple[Any, Any, Any]:
         """Position, velocity and acceleration at tick ``t``, computed together once per tick:
         ``offset + k0 A``, ``k1 A``, ``k2 A`` with ``k0 = e sin``, ``k1 = e w cos + e_dot sin``,
         ``k2 = -e w^2 sin + 2 e_dot w cos + e_ddot sin`` (``sin``, ``cos`` of ``w s + phase``)."""
-        if self._last is not None and self._last[0] == t:
-            return self._last[1]
+        if t == self._last_tick:
+            return self._last_waves
         s = t * self.dt
         omega = self._omega
         arg = omega * s + self._phase
@@ -72,7 +74,7 @@ class Sinusoid(dg.Entity):
         e, de, dde = self._envelope(s)
         waves = self._scaled(e * sin, e * omega * cos + de * sin,
                              -e * omega * omega * sin + 2 * de * omega * cos + dde * sin)
-        self._last = (t, waves)
+        self._last_tick, self._last_waves = t, waves
         return waves
 
     def _scaled(self, k0: Any, k1: Any, k2: Any) -> tuple[Any, Any, Any]:
