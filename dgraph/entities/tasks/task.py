@@ -45,15 +45,13 @@ class Task(dg.Entity):
         self._gain_vectors = Gains(self)
         self._critical: tuple[np.ndarray, np.ndarray] | None = None
 
-    def _gains(self, size: int, t: int) -> tuple[np.ndarray, np.ndarray]:
-        kp = self._gain_vectors.vector("kp", size, t)
-        if self.critical_damping:
-            if self._critical is None or self._critical[0] is not kp:  # a new kp vector: a new Kd
-                kd = 2.0 * np.sqrt(kp)
-                kd.flags.writeable = False  # handed out at every tick, like kp
-                self._critical = (kp, kd)
-            return kp, self._critical[1]
-        return kp, self._gain_vectors.vector("kd", size, t)
+    def _critical_kd(self, kp: np.ndarray) -> np.ndarray:
+        """``Kd = 2 sqrt(Kp)``, computed again only for a new ``kp`` vector."""
+        if self._critical is None or self._critical[0] is not kp:
+            kd = 2.0 * np.sqrt(kp)
+            kd.flags.writeable = False  # handed out at every tick, like kp
+            self._critical = (kp, kd)
+        return self._critical[1]
 
     @dg.output(dtype="object")
     def equation(self, t: int) -> TaskEquation:
@@ -61,8 +59,10 @@ class Task(dg.Entity):
         (the only output a solver reads: the gains and the desired acceleration come with it)."""
         f = read_feature(self, t)
         size = len(f.error)
-        kp, kd = self._gains(size, t)
-        weight = self._gain_vectors.vector("weight", size, t)
+        gains = self._gain_vectors
+        kp = gains.vector("kp", size, t)
+        kd = self._critical_kd(kp) if self.critical_damping else gains.vector("kd", size, t)
+        weight = gains.vector("weight", size, t)
         return TaskEquation(f.jacobian, pd_law(f, kp, kd) - f.drift, weight, f, kp, kd)
 
     @dg.output(dtype="object", depends=("equation",))
