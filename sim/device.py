@@ -322,10 +322,7 @@ class MujocoDevice(dg.Device):
         if dt != self._timestep:
             m.opt.timestep = self._timestep = dt
         tau, replaced = self._torque(t)
-        wrenches = [(body, self.signal(port)(t)) for body, port in self._wrenches] if self._wrenches else ()
-        for (_, port), (_, wrench) in zip(self._wrenches, wrenches, strict=True):
-            if not np.isfinite(wrench).all():
-                raise dg.DGraphError(f"{self.name}: non-finite {port} at tick {t}", entity=self.name, signal=port)
+        wrenches = self._read_wrenches(t) if self._wrenches else ()
         mujoco.mj_getState(m, d, self._saved, _STATE)
         self._pending = True
         if self._removals is not None:
@@ -342,14 +339,24 @@ class MujocoDevice(dg.Device):
         mujoco.mj_step1(m, d)
         self._check(t)
         fallen = self._stage_all(contact_force)
-        fault = self.control_fault.value + 1 if replaced else 0
-        self._fault_staged = fault != self.control_fault.value
+        previous_fault = self.control_fault.value
+        fault = previous_fault + 1 if replaced else 0
+        self._fault_staged = fault != previous_fault
         if self._fault_staged:
             self.control_fault.stage(fault)
         if self.stop_on_fall and fallen:
             raise dg.DGraphError(f"{self.name}: the robot fell during tick {t} (base height "
                                  f"{d.qpos[self._base_z]:.3f} m < fall_height {self.fall_height} m "
                                  f"at tick {t + 1})", entity=self.name, signal="fallen")
+
+    def _read_wrenches(self, t: int) -> list[tuple[int, np.ndarray]]:
+        """``(body id, wrench)`` of each wrench input at ``t``; a non-finite one raises (a disturbance,
+        not a command: the tick fails)."""
+        wrenches = [(body, self.signal(port)(t)) for body, port in self._wrenches]
+        for (_, port), (_, wrench) in zip(self._wrenches, wrenches, strict=True):
+            if not np.isfinite(wrench).all():
+                raise dg.DGraphError(f"{self.name}: non-finite {port} at tick {t}", entity=self.name, signal=port)
+        return wrenches
 
     def commit_state(self, t_next: int) -> None:
         """Publish the staged state at ``t + 1`` (the states of every tick in one go)."""
