@@ -415,15 +415,13 @@ class MujocoDevice(dg.Device):
         v = self._qvel[self._qvel_index]                                 # JointMap.v_from_qvel: the base
         np.dot(self._base_rt, self._qvel_base_linear, out=v[:3])         # linear velocity R_WB^T v
         sensors = self._sensordata[self._sensor_index] * self._sensor_sign  # F/T negated
-        # every array is this tick's own (a gather, or a view of one) and never written again: no copies
-        self.q.stage(q, copy=False)
-        self.v.stage(v, copy=False)
-        self.encoder_position.stage(q[7:], copy=False)
-        self.encoder_velocity.stage(v[6:], copy=False)
-        for state, part in self._sensor_parts:
-            state.stage(sensors[part], copy=False)
-        self.joint_torque.stage(self._actuator_force[self._actuated_index], copy=False)
-        self.contact_force_total.stage(contact_force, copy=False)
+        torque = self._actuator_force[self._actuated_index]
+        # every array is this tick's own (a gather, or a view of one) and never written again: no
+        # copies, and one NaN check per gather
+        dg.stage_all([(self.q, q), (self.v, v), (self.encoder_position, q[7:]), (self.encoder_velocity, v[6:]),
+                      *[(state, sensors[part]) for state, part in self._sensor_parts],
+                      (self.joint_torque, torque), (self.contact_force_total, contact_force)],
+                     (q, v, sensors, torque, contact_force))
         self.sim_time.stage(self.data.time)
         fallen = q.item(2) < self.fall_height  # the base height, qpos[self._base_z]
         self._fallen_staged = everything or fallen != self.fallen.value

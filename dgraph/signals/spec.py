@@ -92,7 +92,7 @@ class Spec:
             raise SpecError(f"{where}: cannot convert {_short(value)} to {self!r}: {exc}") from None
         if not self._shape_ok(array.shape):
             raise SpecError(f"{where}: value of shape {array.shape} does not match {self!r}")
-        if self.dtype == "float" and _has_nan(array):
+        if self.dtype == "float" and has_nan(array):
             raise SpecError(f"{where}: value contains NaN: {_short(value)}")
         return array
 
@@ -123,7 +123,7 @@ class Spec:
             return None
         if (type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == self.shape
                 and self.dtype == "float"):  # the common case: the general path below, in short
-            return "computed a value containing NaN" if _has_nan(value) else None
+            return "computed a value containing NaN" if has_nan(value) else None
         if type(value) is float and self.dtype == "float":
             if value != value:
                 return "computed NaN"
@@ -133,7 +133,7 @@ class Spec:
         if isinstance(value, np.ndarray):
             if not self._shape_ok(value.shape):
                 return f"computed shape {value.shape}, declared {self!r}"
-            if value.dtype.kind == "f" and _has_nan(value):
+            if value.dtype.kind == "f" and has_nan(value):
                 return "computed a value containing NaN"
             if value.dtype.kind != _KIND[self.dtype] and not (self.dtype == "float" and value.dtype.kind in "iub"):
                 return f"computed an array of {value.dtype}, declared {self!r}"
@@ -152,20 +152,21 @@ _KIND = {"float": "f", "int": "i", "bool": "b"}
 _FLOAT64 = np.dtype(np.float64)
 
 
-def exact_float_copy(spec: Spec, value: Any, copy: bool = True) -> np.ndarray | None:
+def exact_float_copy(spec: Spec, value: Any, copy: bool = True, nan_checked: bool = False) -> np.ndarray | None:
     """The fast path that signals take before :meth:`Spec.coerce`: a float64 array of exactly
     the declared (non-scalar) shape of a float spec, without NaN, gives a copy (or itself, with
     ``copy=False``); anything else (even an equivalent value) gives None, and the general path
-    converts it or raises."""
+    converts it or raises. ``nan_checked``: the caller has checked ``value`` for NaN."""
     if (type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == spec.shape
             and spec.dtype == "float" and value.ndim):
         array = value.copy() if copy else value
-        if not _has_nan(array):
+        if nan_checked or not has_nan(array):
             return array
     return None
 
 
-def _has_nan(array: np.ndarray) -> bool:
+
+def has_nan(array: np.ndarray) -> bool:
     """True if a float array holds a NaN: its sum of squares is NaN exactly then (infinities
     square to +inf), and one BLAS dot is cheaper than ``np.isnan(array).any()``."""
     total = np.vdot(array, array)
