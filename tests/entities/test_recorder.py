@@ -143,3 +143,22 @@ def test_columns_stay_aligned_after_a_failed_read_and_duplicates_are_refused(tmp
     assert rec.rrd_path == "out/_.._escape.rrd" and (tmp_path / "out" / "_.._escape.rrd").exists()
     with pytest.raises(dg.ParamError, match=r"recorded twice: dev\.x"):
         Recorder("dup", signals=["dev.x", "a.y", "dev.x"])
+
+
+def test_a_value_that_changes_shape_fails_its_tick_before_anything_commits(tmp_path):
+    class Growing(dg.Entity):
+        u = dg.Input()
+
+        @dg.output()
+        def y(self, t: int) -> np.ndarray:
+            return np.zeros(2 if self.u(t) < 3 else 3)
+
+    g = dg.Graph(dt=0.01, name="rec_shape")
+    g.add(Ticker("dev"), Growing("grow"))
+    g.plug("dev.x", "grow.u")
+    recorder = g.add(Recorder("rec", signals=["dev.x", "grow.y"], rerun="off"))
+    expected = r"rec: grow\.y at tick 3 has shape \(3,\), its first recorded value had \(2,\)"
+    with pytest.raises(dg.SpecError, match=expected):
+        g.run(ticks=10)
+    assert g.t == 3 and g["dev"].x.time == 3  # the failed tick committed nothing: the loop can resume
+    assert recorder.data()["dev.x"].tolist() == [0.0, 1.0, 2.0]  # and the rows before it are all there

@@ -32,15 +32,24 @@ class Table:
         self._data: np.ndarray | None = None
         self.n = 0
 
-    def append(self, row: tuple[Any, ...]) -> None:
-        """Add one row: a tuple of ``width`` values (copied)."""
+    def write(self, row: tuple[Any, ...]) -> None:
+        """Copy ``row`` (a tuple of ``width`` values) into the next free row without adding it
+        (:meth:`keep` does): a row that does not fit raises here and the table stays as it was,
+        so a recorder can check a tick's row before the tick commits."""
         if self._data is None:
             fields = [(f"f{i}", *field_dtype(value)) for i, value in enumerate(row)]
             self._data = np.empty(INITIAL_ROWS, dtype=np.dtype(fields, align=True))
         elif self.n == len(self._data):
             self._data = np.concatenate([self._data, np.empty_like(self._data)])
         self._data[self.n] = row
+
+    def keep(self) -> None:
+        """Add the row last written (once)."""
         self.n += 1
+
+    def field_shape(self, i: int) -> tuple[int, ...]:
+        """The row shape of column ``i`` (set by the first row written)."""
+        return () if self._data is None else self._data.dtype[f"f{i}"].shape
 
     def column(self, i: int, start: int = 0) -> np.ndarray:
         """A view of column ``i`` from row ``start`` on (shape ``(rows, *row_shape)``)."""

@@ -62,7 +62,7 @@ class Recorder(dg.Entity):
             raise dg.ParamError(f"{self.name}: decimation and flush_every must be >= 1", entity=self.name)
         self._sources: list[Signal] | None = None
         self._rows = Table(1 + len(self.signals))  # the tick, then one column per signal
-        self._staged: tuple[Any, ...] | None = None
+        self._row_written = False  # at this tick's observe, kept if the tick commits
         self._stream: RerunStream | None = None
         self._plotted: list[tuple[int, str, list[str]]] | None = None
         self._pending = 0
@@ -94,16 +94,30 @@ class Recorder(dg.Entity):
         return self._sources
 
     def observe(self, t: int) -> None:
-        """Read every recorded signal at ``t``; the row is kept when the tick commits."""
+        """Read every recorded signal at ``t`` and write the row (a value that does not fit its
+        column fails the tick here, before anything commits); it is kept when the tick commits."""
         sources = self._sources if self._sources is not None else self._open()
-        self._staged = (t, *[sig(t) for sig in sources])
+        row = (t, *[sig(t) for sig in sources])
+        try:
+            self._rows.write(row)
+        except (ValueError, TypeError) as exc:
+            raise self._misfit(row, t, exc) from exc
+        self._row_written = True
+
+    def _misfit(self, row: tuple[Any, ...], t: int, cause: Exception) -> dg.DGraphError:
+        """The error naming the recorded signal whose value at ``t`` does not fit its column."""
+        for i, (name, value) in enumerate(zip(self.signals, row[1:], strict=True), start=1):
+            shape, expected = np.shape(value), self._rows.field_shape(i)
+            if shape not in ((), expected):
+                return dg.SpecError(f"{self.name}: {name} at tick {t} has shape {shape}, its first recorded "
+                                    f"value had {expected}", entity=self.name, signal=name)
+        return dg.GraphError(f"{self.name}: the row of tick {t} cannot be recorded: {cause}", entity=self.name)
 
     def commit_state(self, t_next: int) -> None:
-        """The tick committed: append its row (a failed tick leaves no row)."""
-        row, self._staged = self._staged, None
-        if row is None:
-            return
-        self._rows.append(row)
+        """The tick committed: keep its row (a failed tick leaves no row)."""
+        if self._row_written:
+            self._row_written = False
+            self._rows.keep()
         if self._stream is not None:
             self._pending += 1
             if self._pending >= self.flush_every:
