@@ -28,7 +28,8 @@ lint: $(STAMP)
 	$(BIN)/ruff check .
 
 ## bench: signal overhead against Drake, TALOS tick against TSID 1.10 (with the acceptance of the tick issue and the
-## demo's speed-up over ddec0a5), where the demo's time goes (py-spy), ID formulations, energy tank (installs the peers)
+## demo's speed-up over ddec0a5), where the demo's time goes (py-spy), ID formulations, sole wrenches or corner
+## forces, energy tank (installs the peers)
 bench: $(STAMP)
 	$(BIN)/pip install --quiet -e ".[bench]"
 	bash bench/setup_peer.sh
@@ -37,6 +38,7 @@ bench: $(STAMP)
 	$(BIN)/python bench/talos_tick.py --ticks 3000 --rounds 3 --base ddec0a5 --json out/talos_tick.json
 	$(BIN)/python bench/profile_shares.py --json out/profile_shares.json
 	$(BIN)/python bench/id_formulations.py
+	$(BIN)/python bench/contact_forces.py --json out/contact_forces.json
 	$(BIN)/pip install --quiet -e ".[plots]"
 	$(BIN)/python bench/energy_tank.py --plots docs
 
