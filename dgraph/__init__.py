@@ -28,7 +28,7 @@ from dgraph.errors import (
 from dgraph.graph import Graph, plug
 from dgraph.params import Param
 from dgraph.registry import entity_types, get_type, register
-from dgraph.signals import Input, Output, Signal, Spec, State, commit_all, output, stage_all
+from dgraph.signals import Input, Output, Signal, Spec, State, commit_all, output, stage_views
 
 __version__ = "0.1.0"
 
@@ -49,5 +49,5 @@ __all__ = [
     "ComputeError", "CycleError", "DGraphError", "DependencyError", "Device", "Entity", "Graph", "GraphError",
     "GraphFileError", "HookError", "Hooks", "Input", "Output", "Param", "ParamError", "PlugError",
     "RegistryError", "Signal", "Spec", "SpecError", "State", "UnpluggedInputError", "command", "commit_all",
-    "entity_types", "get_type", "load", "output", "plug", "register", "save", "stage_all",
+    "entity_types", "get_type", "load", "output", "plug", "register", "save", "stage_views",
 ]

@@ -218,6 +218,9 @@ class MujocoDevice(dg.Device):
         self._sensor_parts = [(self.imu_orientation, slice(0, 4)), (self.imu_angular_velocity, slice(4, 7)),
                               (self.imu_linear_acceleration, slice(7, 10)),
                               *[(state, slice(10 + 6 * i, 16 + 6 * i)) for i, state in enumerate(self._ft_states)]]
+        # the states that are q, v or views of them (the encoders: the joints' part)
+        self._q_parts = [(self.q, None), (self.encoder_position, slice(7, None))]
+        self._v_parts = [(self.v, None), (self.encoder_velocity, slice(6, None))]
         self._base_z = int(self.joint_map.qpos_index[2])
         # views on the MjData buffers (fixed for its lifetime; mj_setState writes into them)
         d = self.data
@@ -418,10 +421,8 @@ class MujocoDevice(dg.Device):
         torque = self._actuator_force[self._actuated_index]
         # every array is this tick's own (a gather, or a view of one) and never written again: no
         # copies, and one NaN check per gather
-        dg.stage_all([(self.q, q), (self.v, v), (self.encoder_position, q[7:]), (self.encoder_velocity, v[6:]),
-                      *[(state, sensors[part]) for state, part in self._sensor_parts],
-                      (self.joint_torque, torque), (self.contact_force_total, contact_force)],
-                     (q, v, sensors, torque, contact_force))
+        dg.stage_views([(q, self._q_parts), (v, self._v_parts), (sensors, self._sensor_parts),
+                        (torque, ((self.joint_torque, None),)), (contact_force, ((self.contact_force_total, None),))])
         self.sim_time.stage(self.data.time)
         fallen = q.item(2) < self.fall_height  # the base height, qpos[self._base_z]
         self._fallen_staged = everything or fallen != self.fallen.value

@@ -1,7 +1,7 @@
 """Signals: time-stamped, lazily cached entity ports (see ``docs/design.md``)."""
 
 from dgraph.signals.clock import Clock
-from dgraph.signals.signal import Input, Output, Signal, State, commit_all, output, stage_all
+from dgraph.signals.signal import Input, Output, Signal, State, commit_all, output, stage_views
 from dgraph.signals.spec import Spec
 
-__all__ = ["Clock", "Input", "Output", "Signal", "Spec", "State", "commit_all", "output", "stage_all"]
+__all__ = ["Clock", "Input", "Output", "Signal", "Spec", "State", "commit_all", "output", "stage_views"]

@@ -478,19 +478,19 @@ class State(Output):
         """A state never becomes stale: it changes only when its entity sets it."""
 
 
-def stage_all(staged: Sequence[tuple[State, Any]], blocks: Sequence[np.ndarray]) -> None:
-    """``state.stage(value, copy=False)`` for each ``(state, value)`` of ``staged``, whose float
-    values are views of the arrays ``blocks``: one NaN check per block instead of one per state
-    (a device stages a dozen views of a few gathers at every tick). When a block holds a NaN,
-    each state is staged on its own, so the error names the first state with a NaN (as
-    :meth:`State.stage` would). The values are kept as they are, like ``copy=False``."""
-    if any(has_nan(block) for block in blocks):
-        for state, value in staged:
-            state.stage(value, copy=False)
-        return
-    for state, value in staged:
-        array = exact_float_copy(state.spec, value, copy=False, nan_checked=True)
-        state._staged = array if array is not None else _coerce(state, value, False)
+def stage_views(groups: Sequence[tuple[np.ndarray, Sequence[tuple[State, slice | None]]]]) -> None:
+    """For each ``(block, parts)`` of ``groups``: ``state.stage(block[index], copy=False)`` for
+    each ``(state, index)`` of ``parts`` (``index`` None: the whole block), with one NaN check
+    per block instead of one per state (a device stages a dozen views of a few gathers at
+    every tick). A block with a NaN has its views checked one by one, so the error names the
+    first state with a NaN, as :meth:`State.stage` would. The views are kept as they are, like
+    ``copy=False``: the blocks must be arrays nobody writes again."""
+    for block, parts in groups:
+        checked = not has_nan(block)
+        for state, index in parts:
+            value = block if index is None else block[index]
+            array = exact_float_copy(state.spec, value, copy=False, nan_checked=checked)
+            state._staged = array if array is not None else _coerce(state, value, False)
 
 
 def commit_all(states: Sequence[State], t: int) -> None:

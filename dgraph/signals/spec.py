@@ -165,7 +165,6 @@ def exact_float_copy(spec: Spec, value: Any, copy: bool = True, nan_checked: boo
     return None
 
 
-
 def has_nan(array: np.ndarray) -> bool:
     """True if a float array holds a NaN: its sum of squares is NaN exactly then (infinities
     square to +inf), and one BLAS dot is cheaper than ``np.isnan(array).any()``."""

@@ -532,21 +532,24 @@ def test_staging_without_a_copy_keeps_the_array_and_still_refuses_nan(graph):
 def test_staging_views_of_a_block_checks_the_block_once_and_names_a_state_with_nan(graph):
     class Sensors(dg.Entity):
         has_state = True
+        wrench = dg.State(shape=(6,), initial=np.zeros(6))
         force = dg.State(shape=(3,), initial=np.zeros(3))
         torque = dg.State(shape=(3,), initial=np.zeros(3))
-        height = dg.State(shape=(), initial=0.0)
 
     sensors = graph.add(Sensors("ft"))
+    parts = [(sensors.wrench, None), (sensors.force, slice(0, 3)), (sensors.torque, slice(3, 6))]
     block = np.arange(6.0)
-    dg.stage_all([(sensors.force, block[:3]), (sensors.torque, block[3:]), (sensors.height, 0.5)], [block])
-    dg.commit_all([sensors.force, sensors.torque, sensors.height], 1)
-    assert sensors.force.value.base is block and sensors.torque.value.tolist() == [3.0, 4.0, 5.0]  # no copies
-    assert sensors.height.value == 0.5  # a value outside the blocks takes the general path
+    dg.stage_views([(block, parts)])
+    dg.commit_all([sensors.wrench, sensors.force, sensors.torque], 1)
+    assert sensors.wrench.value is block and sensors.force.value.base is block  # no copies
+    assert sensors.torque.value.tolist() == [3.0, 4.0, 5.0]
     block = np.array([0.0, 1.0, 2.0, 3.0, np.nan, 5.0])
-    with pytest.raises(dg.SpecError, match=r"ft\.torque.*NaN"):
-        dg.stage_all([(sensors.force, block[:3]), (sensors.torque, block[3:])], [block])
+    with pytest.raises(dg.SpecError, match=r"ft\.wrench.*NaN"):
+        dg.stage_views([(block, parts)])
+    with pytest.raises(dg.SpecError, match=r"ft\.torque.*NaN"):  # the first view holding the NaN is named
+        dg.stage_views([(block, parts[1:])])
     with pytest.raises(dg.SpecError, match=r"ft\.force"):  # a wrong shape is refused as by stage
-        dg.stage_all([(sensors.force, np.zeros(4))], [np.zeros(4)])
+        dg.stage_views([(np.zeros(4), [(sensors.force, None)])])
 
 
 def test_committing_states_together_invalidates_their_readers_once_and_alike(graph):
