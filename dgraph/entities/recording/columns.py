@@ -1,4 +1,4 @@
-"""Growable numpy rows: one row per tick in a structured array, one numpy call per row appended."""
+"""Growable numpy rows: one row per tick in a structured array, one numpy call per row written."""
 
 from __future__ import annotations
 
@@ -20,20 +20,19 @@ class Table:
     """Rows of a fixed number of columns, stored in one numpy structured array that doubles when full.
 
     Each column's dtype and row shape come from the first row (:func:`field_dtype`); a row is
-    copied in with a single assignment, so appending costs one numpy call whatever the number
-    of columns. A value of another shape raises ``ValueError`` (a scalar fills a vector column,
-    as numpy broadcasts it).
+    copied in with a single assignment (:meth:`write`, then :meth:`keep`), one numpy call
+    whatever the number of columns. A value of another shape raises ``ValueError`` (a scalar
+    fills a vector column, as numpy broadcasts it).
     """
 
-    __slots__ = ("_data", "n", "width")
+    __slots__ = ("_data", "n")
 
-    def __init__(self, width: int) -> None:
-        self.width = width
+    def __init__(self) -> None:
         self._data: np.ndarray | None = None
         self.n = 0
 
     def write(self, row: tuple[Any, ...]) -> None:
-        """Copy ``row`` (a tuple of ``width`` values) into the next free row without adding it
+        """Copy ``row`` (a tuple, one value per column) into the next free row without adding it
         (:meth:`keep` does): a row that does not fit raises here and the table stays as it was,
         so a recorder can check a tick's row before the tick commits."""
         if self._data is None:

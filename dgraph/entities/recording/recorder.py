@@ -61,7 +61,7 @@ class Recorder(dg.Entity):
         if self.decimation < 1 or self.flush_every < 1:
             raise dg.ParamError(f"{self.name}: decimation and flush_every must be >= 1", entity=self.name)
         self._sources: list[Signal] | None = None
-        self._rows = Table(1 + len(self.signals))  # the tick, then one column per signal
+        self._rows = Table()  # the tick, then one column per signal
         self._row_written = False  # at this tick's observe, kept if the tick commits
         self._stream: RerunStream | None = None
         self._plotted: list[tuple[int, str, list[str]]] | None = None

@@ -102,8 +102,7 @@ class RobotModel(dg.Entity):
         if self.tool_frames:
             self.pin_model = with_tool_frames(self.pin_model, self.tool_frames, self.name)
         self.nq, self.nv = self.pin_model.nq, self.pin_model.nv
-        self._data = self.pin_model.createData()
-        self._fields = DataFields(self._data)  # the views every pass on it refills
+        self._fields = DataFields(self.pin_model.createData())  # the data of every pass, and its views
         for frame in self.frames:
             if not self.pin_model.existFrame(frame):
                 raise dg.ParamError(f"{self.name}: the model has no frame {frame!r}", entity=self.name)
@@ -115,7 +114,7 @@ class RobotModel(dg.Entity):
     @dg.output(dtype="object", depends=("q", "v"))
     def state(self, t: int) -> RobotState:
         """The shared Pinocchio pass at ``(q(t), v(t))``."""
-        return RobotState(self.pin_model, self._data, self.q(t), self.v(t), self._fields)
+        return RobotState(self.pin_model, self._fields, self.q(t), self.v(t))
 
     @dg.output(shape=("nv", "nv"), depends=("state",))
     def mass_matrix(self, t: int) -> np.ndarray:

@@ -118,16 +118,12 @@ class RobotState:
     the tick): each is computed at most once per state (the methods ``frame_placement`` and
     ``gravity_torque`` compute at each call). Every array handed out is read-only.
 
-    ``fields`` are the :class:`DataFields` of ``data``, made once by the data's owner (a
-    :class:`~dgraph.entities.robot.model.RobotModel`) for all its passes; made here if not given.
+    The pass runs on ``fields.data``: a :class:`DataFields` is made once by the data's owner (a
+    :class:`~dgraph.entities.robot.model.RobotModel`) for all its passes.
     """
 
-    def __init__(self, model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray,
-                 fields: DataFields | None = None):
-        if fields is None:
-            fields = DataFields(data)
-        elif fields.data is not data:
-            raise ValueError("RobotState: fields are the views of another Pinocchio data")
+    def __init__(self, model: pin.Model, fields: DataFields, q: np.ndarray, v: np.ndarray):
+        data = fields.data
         self.model, self._pin_data, self._fields, self.q, self.v = model, data, fields, q, v
         self._key = id(data)
         _OWNERS[self._key] = weakref.ref(self)

@@ -32,7 +32,7 @@ class Gains:
         cached = self._cache.get(name)
         if cached is not None:
             inp, vector = cached[0], cached[3]
-            if inp(t) is cached[1] and inp._source is None and len(vector) == size:
+            if inp(t) is cached[1] and inp.source is None and len(vector) == size:
                 return vector  # the same constant as last time
         return self._read(name, size, t, cached)
 

@@ -18,6 +18,7 @@ import dgraph as dg
 from dgraph.entities.estimators import ExternalForce
 from dgraph.entities.estimators.external_force import payload_mass
 from dgraph.entities.robot import RobotModel, RobotState, load_model
+from dgraph.entities.robot.robot_state import DataFields
 from sim.device import MujocoDevice
 
 HAND_MASS = 1.384  # URDF mass beyond the wrist sensor (graphs/talos_push_tank.yaml)
@@ -80,7 +81,7 @@ def test_default_payload_is_the_subtree_of_the_parent_joint(run):
     assert extra == pytest.approx(0.3084, abs=1e-3)  # arm_left_7_link: 0.308441 kg
     offset = rows[SETTLE:, 1] - rows[SETTLE:, 0]
     np.testing.assert_allclose(offset, np.tile([0.0, 0.0, 9.81 * extra], (len(offset), 1)), atol=1e-9)
-    state = RobotState(model, model.createData(), pin.neutral(model), np.zeros(model.nv))
+    state = RobotState(model, DataFields(model.createData()), pin.neutral(model), np.zeros(model.nv))
     assert payload_mass(state, model.getFrameId("wrist_left_ft_link")) == pytest.approx(data.mass[joint])
     assert payload_mass(state, model.getFrameId("universe")) == pytest.approx(data.mass[0])
 
