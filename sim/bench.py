@@ -5,6 +5,8 @@ device's ``prepare_state`` + ``commit_state`` and, from the same MuJoCo state, t
 ``mj_step2`` + ``mj_step1`` (what ``prepare_state`` calls; together one ``mj_step``). It also times
 staging and committing its states alone (dgraph's ``State.stage``/``commit``: shape, dtype and
 NaN checks), to tell the device's own work from the signal layer's. Medians, in microseconds.
+Then MuJoCo's own timers over the same steps (``mjData.timer``: means per call of the step and
+its stages: position, of which collision and its broad and narrow phases, constraint solver).
 """
 
 from __future__ import annotations
@@ -64,7 +66,21 @@ def measure(ticks: int = 3000) -> dict[str, float]:
     med["overhead"] = med["tick"] - med["mujoco"]
     med["states"] = len(states)
     med["own"] = med["overhead"] - med["stage_commit"]
+    med.update(mujoco_timers(d))
     return med
+
+
+TIMERS = {"step": "STEP", "position": "POSITION", "collision": "POS_COLLISION", "broad phase": "COL_BROAD",
+          "narrow phase": "COL_NARROW", "constraint": "CONSTRAINT", "velocity": "VELOCITY"}
+
+
+def mujoco_timers(d: mujoco.MjData) -> dict[str, float]:
+    """MuJoCo's own timers: the mean duration per call (µs) of the step and its stages."""
+    means = {}
+    for name, timer in TIMERS.items():
+        stat = d.timer[getattr(mujoco.mjtTimer, f"mjTIMER_{timer}")]
+        means[f"mujoco {name}"] = 1e6 * stat.duration / max(stat.number, 1)
+    return means
 
 
 def main() -> None:
@@ -77,6 +93,7 @@ def main() -> None:
           f"overhead {med['overhead']:.1f} us, of which {med['states']:.0f} x State.stage+commit "
           f"{med['stage_commit']:.1f} us "
           f"and the device's own work {med['own']:.1f} us (medians over {args.ticks} ticks)")
+    print("MuJoCo's timers (mean per call): " + ", ".join(f"{name} {med[f'mujoco {name}']:.1f} us" for name in TIMERS))
 
 
 if __name__ == "__main__":
