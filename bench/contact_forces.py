@@ -9,7 +9,8 @@ against the 6D wrench in their wrench cone (``forces: wrench``), on recorded swa
 2. Replay each recording through a fresh :class:`InverseDynamicsQP` at the library's settings,
    tick after tick (warm-started, as in the loop), ``--rounds`` times with the two modes
    alternating (A/B/A/B). Reported per mode and round: the median and p99 of the solver's time
-   (assembly + ProxQP, ``solution.solve_time``) and the mean ProxQP iterations; the ratio
+   (assembly + ProxQP, ``solution.solve_time``), the mean ProxQP iterations, the mean number of
+   active inequality rows (a nonzero multiplier) and the share of ticks with one; the ratio
    wrench / corners of the best rounds; the problem sizes; the calibration before and after.
 
 3. With ``--closed-loop S``: S seconds of the sway in MuJoCo per mode (recorder in memory, Rerun
@@ -83,16 +84,18 @@ def record(mode: str, ticks: int, warmup: int) -> tuple[list[tuple], dict]:
 def replay(problems: list[tuple], info: dict) -> dict[str, float]:
     """One pass of a fresh solver over the recording: median and p99 time (µs), mean iterations."""
     qp = InverseDynamicsQP(info["nv"], info["n_unactuated"], info["effort_limit"])
-    times, iterations = [], []
+    times, iterations, active = [], [], []
     for tick, (mass_matrix, bias_forces, tasks, contacts) in enumerate(problems):
         solution = qp.solve(mass_matrix, bias_forces, tasks, contacts, tick)
         if solution.status != SOLVED:
             raise RuntimeError(f"tick {tick}: status {solution.status}")
         times.append(solution.solve_time * 1e6)
         iterations.append(solution.iterations)
+        active.append(np.count_nonzero(qp.workspace(contacts, False).free.latest[2]))  # rows with a multiplier
     times = times[10:]  # the first solves start cold
     return {"median_us": statistics.median(times), "p99_us": float(np.percentile(times, 99)),
-            "iterations": float(np.mean(iterations))}
+            "iterations": float(np.mean(iterations)), "active_rows": float(np.mean(active)),
+            "ticks_with_active_rows": float(np.mean(np.array(active) > 0))}
 
 
 SOLES = ("left_sole_link", "right_sole_link")
@@ -163,12 +166,14 @@ def main() -> None:
     loops = {mode: closed_loop(mode, args.closed_loop) for mode in MODES} if args.closed_loop > 0 else {}
     after = calibrate()
     print(f"{args.ticks} recorded sway ticks per mode (after {args.warmup}), {args.rounds} rounds, alternating\n")
-    print("| mode | variables | round | solver median µs | p99 µs | ProxQP iterations |")
-    print("|---|---:|---:|---:|---:|---:|")
+    print("| mode | variables | round | solver median µs | p99 µs | ProxQP iterations | active rows | "
+          "ticks with active rows |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
     for mode in MODES:
         for i, run in enumerate(rounds[mode], start=1):
             print(f"| {mode} | {recordings[mode][1]['variables']} | {i} | {run['median_us']:.1f} | "
-                  f"{run['p99_us']:.1f} | {run['iterations']:.2f} |")
+                  f"{run['p99_us']:.1f} | {run['iterations']:.2f} | {run['active_rows']:.2f} | "
+                  f"{100 * run['ticks_with_active_rows']:.0f} % |")
     best = {mode: min(run["median_us"] for run in rounds[mode]) for mode in MODES}
     print(f"\nbest rounds: corners {best['corners']:.1f} µs, wrench {best['wrench']:.1f} µs; "
           f"ratio wrench / corners {best['wrench'] / best['corners']:.2f}")

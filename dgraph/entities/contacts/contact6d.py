@@ -99,8 +99,9 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
     ``bench/contact_forces.py``) and has the same optimum while no corner pyramid binds. Where one binds (the
     centre of pressure on an edge of the sole), the corner QP also pays for the forces that
     keep the corners in their pyramids and the two answers differ: in ``graphs/talos_sway.yaml``
-    (the unloaded sole's centre of pressure reaches its edge at each sway) the base slides
-    3.3 mm sideways in 20 s with wrenches against 0.5 mm with corner forces.
+    (the unloaded sole's centre of pressure reaches its edge at each sway) the soles creep
+    ~7.5 mm on the floor in 20 s with wrenches against ~2.6 mm with corner forces
+    (``bench/contact_forces.py --closed-loop 20``).
 
     Parameters: ``frame`` (contact frame, z along the sole normal, origin on the sole),
     ``front``, ``back``, ``half_width`` (sole corners, m; TALOS: 0.10, 0.11, 0.069),
