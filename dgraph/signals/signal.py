@@ -445,14 +445,15 @@ class State(Output):
                                       entity=self.entity.name, signal=self.name)
         return self._value
 
-    def stage(self, value: Any, copy: bool = True) -> None:
+    def stage(self, value: Any, copy: bool = True, nan_checked: bool = False) -> None:
         """Check and hold ``value`` as the next state (raises :class:`SpecError` here, not at commit).
 
         ``copy=False`` keeps a float array of the declared shape as it is (still checked for
         NaN): for a caller that hands over an array of its own that it never writes again, such
         as the result of a gather (a device's sensors), it saves a copy per state per tick.
+        ``nan_checked``: the caller found no NaN in ``value`` (:func:`stage_views`).
         """
-        array = exact_float_copy(self.spec, value, copy)  # the common case, before the general one
+        array = exact_float_copy(self.spec, value, copy, nan_checked)  # the common case, before the general one
         self._staged = array if array is not None else _coerce(self, value, copy)
 
     def commit(self, t: int) -> None:
@@ -488,9 +489,7 @@ def stage_views(groups: Sequence[tuple[np.ndarray, Sequence[tuple[State, slice |
     for block, parts in groups:
         checked = not has_nan(block)
         for state, index in parts:
-            value = block if index is None else block[index]
-            array = exact_float_copy(state.spec, value, copy=False, nan_checked=checked)
-            state._staged = array if array is not None else _coerce(state, value, False)
+            state.stage(block if index is None else block[index], False, checked)
 
 
 def commit_all(states: Sequence[State], t: int) -> None:
