@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from dgraph.entities.features.feature import contiguous
+from dgraph.entities.selection import contiguous
 from dgraph.errors import ParamError
 
 

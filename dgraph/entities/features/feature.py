@@ -4,16 +4,12 @@ from __future__ import annotations
 
 import abc
 from dataclasses import dataclass
-from typing import TypeAlias
 
 import numpy as np
 
 import dgraph as dg
 from dgraph.entities.robot.robot_state import RobotState
-
-Rows: TypeAlias = np.ndarray | slice | None
-"""Rows kept by a mask: all (``None``), a contiguous range (``slice``: selecting gives views) or
-indices."""
+from dgraph.entities.selection import Rows, contiguous
 
 
 @dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
@@ -59,15 +55,6 @@ def parse_mask(entity: dg.Entity, mask: str, width: int) -> Rows:
         raise dg.ParamError(f"{entity.name}: mask must be {width} characters 0/1 with at least one 1, "
                             f"got {mask!r}", entity=entity.name)
     return contiguous(np.flatnonzero([c == "1" for c in mask]), width)
-
-
-def contiguous(indices: np.ndarray, width: int | None = None) -> Rows:
-    """``indices`` as ``None`` if they are all ``width`` rows in order, a slice if they are
-    consecutive and increasing (selecting then gives views), else themselves."""
-    start = int(indices[0]) if len(indices) else 0
-    if not np.array_equal(indices, np.arange(start, start + len(indices))):
-        return indices
-    return None if start == 0 and len(indices) == width else slice(start, start + len(indices))
 
 
 class Feature(dg.Entity, abc.ABC):

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.features.feature import Feature, FeatureValue, contiguous
+from dgraph.entities.features.feature import Feature, FeatureValue
 from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
+from dgraph.entities.selection import contiguous
 
 
 @dg.register
