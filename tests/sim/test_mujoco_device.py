@@ -180,7 +180,6 @@ def test_divergence_raises_and_keeps_the_state():
     assert g.t == 6 and dev.control_fault.value == 0
 
 
-
 def test_a_diverged_state_is_named_by_mujocos_own_checks_even_without_its_reset():
     """The device's check reads MuJoCo's bad qpos/qvel/qacc warnings (``mj_step1`` starts by checking
     the new qpos and qvel); with MuJoCo's reset off, the state stays diverged and is named too."""
@@ -213,6 +212,7 @@ def test_a_failed_tick_with_another_wrench_resumes_as_if_it_never_ran():
         runs.append({name: np.array(s.value) for name, s in dev.outputs.items()})
     for name, value in runs[0].items():
         np.testing.assert_array_equal(runs[1][name], value, err_msg=name)
+
 
 class Commands(dg.Entity):
     """A test source: row ``t`` of ``rows`` (NaN allowed: the graph's value checks are off), or
