@@ -251,7 +251,7 @@ def test_validation_names_a_missing_frame_and_a_model_size_mismatch(tmp_path):
 
 def test_the_assembly_allocates_no_array_in_steady_state():
     """Over 100 ticks of a moving robot, filling the QP allocates at most the small Python objects
-    of numpy calls and keys (keyword dictionaries, views, tuples: 0.7-1.1 kB at once), never an
+    of numpy calls and keys (keyword dictionaries, views, tuples: ~1.4 kB at once), never an
     array of the problem's size (H alone is 31 kB, one task's A^T W A 11.5 kB, a contact's
     J^T T 3.6 kB); a whole solve adds only its answer (x, tau, the forces, the solution object).
     Measured as the peak of traced memory above its level before the call (tracemalloc traces
