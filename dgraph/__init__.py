@@ -28,7 +28,7 @@ from dgraph.errors import (
 from dgraph.graph import Graph, plug
 from dgraph.params import Param
 from dgraph.registry import entity_types, get_type, register
-from dgraph.signals import Input, Output, Signal, Spec, State, commit_all, output, stage_views
+from dgraph.signals import VALUE_TYPES, Input, Output, Signal, Spec, State, commit_all, output, stage_views, value_type
 
 __version__ = "0.1.0"
 
@@ -46,8 +46,38 @@ def save(graph: Graph, path: str) -> None:
 
 
 __all__ = [
-    "ComputeError", "CycleError", "DGraphError", "DependencyError", "Device", "Entity", "Graph", "GraphError",
-    "GraphFileError", "HookError", "Hooks", "Input", "Output", "Param", "ParamError", "PlugError",
-    "RegistryError", "Signal", "Spec", "SpecError", "State", "UnpluggedInputError", "command", "commit_all",
-    "entity_types", "get_type", "load", "output", "plug", "register", "save", "stage_views",
+    "VALUE_TYPES",
+    "ComputeError",
+    "CycleError",
+    "DGraphError",
+    "DependencyError",
+    "Device",
+    "Entity",
+    "Graph",
+    "GraphError",
+    "GraphFileError",
+    "HookError",
+    "Hooks",
+    "Input",
+    "Output",
+    "Param",
+    "ParamError",
+    "PlugError",
+    "RegistryError",
+    "Signal",
+    "Spec",
+    "SpecError",
+    "State",
+    "UnpluggedInputError",
+    "command",
+    "commit_all",
+    "entity_types",
+    "get_type",
+    "load",
+    "output",
+    "plug",
+    "register",
+    "save",
+    "stage_views",
+    "value_type",
 ]

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from dgraph.errors import ComputeError, DGraphError, PlugError, SpecError, UnpluggedInputError
 from dgraph.signals.clock import Clock
-from dgraph.signals.spec import ShapeDecl, Spec, exact_float_copy, has_nan, resolve_shape
+from dgraph.signals.spec import DType, ShapeDecl, Spec, exact_float_copy, has_nan, resolve_shape
 
 if TYPE_CHECKING:
     import numpy as np
@@ -51,7 +51,7 @@ class Signal:
 
     __slots__ = ("_dtype", "_labels", "_shape_decl", "doc", "entity", "name", "spec")
 
-    def __init__(self, shape: ShapeDecl = None, dtype: str = "float",
+    def __init__(self, shape: ShapeDecl = None, dtype: DType = "float",
                  labels: Sequence[str] | None = None, doc: str = ""):
         self.entity: Entity | None = None
         self.name = ""
@@ -134,7 +134,7 @@ class Output(Signal):
     )
 
     def __init__(self, fn: Callable[..., Any] | None = None, *, shape: ShapeDecl = None,
-                 dtype: str = "float", depends: Sequence[str] | None = None, period: int = 1,
+                 dtype: DType = "float", depends: Sequence[str] | None = None, period: int = 1,
                  labels: Sequence[str] | None = None, doc: str = "",
                  on_demand: Sequence[str] | bool = ()):
         super().__init__(shape, dtype, labels, doc or (fn.__doc__ or "" if fn else "").strip())
@@ -420,7 +420,7 @@ class State(Output):
 
     __slots__ = ("_staged", "initial")
 
-    def __init__(self, *, shape: ShapeDecl = None, dtype: str = "float", initial: Any = None,
+    def __init__(self, *, shape: ShapeDecl = None, dtype: DType = "float", initial: Any = None,
                  labels: Sequence[str] | None = None, doc: str = ""):
         super().__init__(None, shape=shape, dtype=dtype, depends=(), labels=labels, doc=doc)
         self.initial = initial
@@ -514,7 +514,7 @@ class Input(Signal):
 
     __slots__ = ("_has_value", "_set_time", "_source", "_subs", "_value", "default", "is_set")
 
-    def __init__(self, shape: ShapeDecl = None, dtype: str = "float", default: Any = _UNSET,
+    def __init__(self, shape: ShapeDecl = None, dtype: DType = "float", default: Any = _UNSET,
                  labels: Sequence[str] | None = None, doc: str = ""):
         super().__init__(shape, dtype, labels, doc)
         self.default = default
@@ -592,9 +592,9 @@ class Input(Signal):
         if not isinstance(source, Output):
             raise PlugError(f"cannot plug {source!r} into {self.full_name}: not an output")
         if not self.spec.accepts(source.spec):
+            why = "a different type" if self.spec.structured or source.spec.structured else "shape or dtype mismatch"
             raise PlugError(f"cannot plug {source.full_name} {source.spec!r} into {self.full_name} "
-                            f"{self.spec!r}: shape or dtype mismatch", entity=self.entity.name,
-                            signal=self.name)
+                            f"{self.spec!r}: {why}", entity=self.entity.name, signal=self.name)
         if self._source is not None:
             self.unplug()
         self.is_set = False
@@ -661,7 +661,7 @@ def _short(value: Any) -> str:
     return text if len(text) <= 50 else text[:47] + "..."
 
 
-def output(shape: ShapeDecl = None, dtype: str = "float", depends: Sequence[str] | None = None,
+def output(shape: ShapeDecl = None, dtype: DType = "float", depends: Sequence[str] | None = None,
            period: int = 1, labels: Sequence[str] | None = None, doc: str = "",
            on_demand: Sequence[str] | bool = ()) -> Callable[[Callable[..., Any]], Output]:
     """Decorator declaring a computed output from a method ``def name(self, t)``.

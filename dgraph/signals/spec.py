@@ -21,27 +21,43 @@ attribute giving the size), a callable of the entity returning a shape, or ``Non
 
 DTYPES = ("float", "int", "bool", "object")
 
+DType = str | type
+"""A declared dtype: one of :data:`DTYPES`, or a class (a structured value type)."""
+
 
 class Spec:
     """Resolved shape and dtype of a signal.
 
     ``shape`` is ``None`` (any shape) or a tuple whose entries are ints or ``None`` (any size
-    along that axis). ``dtype`` is one of ``float``, ``int``, ``bool`` or ``object`` (no check).
-    ``labels`` optionally names the components of a vector (used by recorders and plots).
+    along that axis). ``dtype`` is one of ``float``, ``int``, ``bool``, ``object`` (anything,
+    unchecked), or a class: a **structured** signal, whose values are instances of that class
+    (a task equation, a contact constraint, a robot state...) and which plugs only into an input
+    of the same class or a base class of it. ``labels`` optionally names the components of a
+    vector (used by recorders and plots).
     """
 
-    __slots__ = ("dtype", "exact", "labels", "shape")
+    __slots__ = ("dtype", "exact", "labels", "shape", "structured")
 
-    def __init__(self, shape: tuple[int | None, ...] | None = None, dtype: str = "float",
+    def __init__(self, shape: tuple[int | None, ...] | None = None, dtype: DType = "float",
                  labels: Sequence[str] | None = None):
-        if dtype not in DTYPES:
-            raise SpecError(f"unknown dtype {dtype!r}; expected one of {DTYPES}")
+        self.structured = isinstance(dtype, type)
+        if not self.structured and dtype not in DTYPES:
+            raise SpecError(f"unknown dtype {dtype!r}; expected one of {DTYPES} or a class")
+        if self.structured and shape is not None:
+            raise SpecError(f"a structured signal ({dtype.__name__}) has no shape, got {shape!r}")
         self.shape = None if shape is None else tuple(shape)
         self.dtype = dtype
         self.labels = tuple(labels) if labels is not None else None
         self.exact = self.shape is not None and all(d is not None for d in self.shape)
 
+    @property
+    def type_name(self) -> str:
+        """The dtype as written in messages: ``float``... or the structured class's name."""
+        return self.dtype.__name__ if self.structured else self.dtype
+
     def __repr__(self) -> str:
+        if self.structured:
+            return self.dtype.__name__
         shape = "any" if self.shape is None else "(" + ", ".join(
             "*" if d is None else str(d) for d in self.shape) + ("," if len(self.shape) == 1 else "") + ")"
         return f"{self.dtype}{shape}"
@@ -54,7 +70,13 @@ class Spec:
 
     # -- plugging -------------------------------------------------------------------------
     def accepts(self, source: Spec) -> bool:
-        """True if a signal of spec ``source`` may feed an input of this spec."""
+        """True if a signal of spec ``source`` may feed an input of this spec: an ``object``
+        input takes anything; a structured input takes a source of its class or a subclass of
+        it, nothing else (an untyped ``object`` source included: the core could not check it)."""
+        if self.dtype == "object":
+            return True
+        if self.structured or source.structured:
+            return self.structured and source.structured and issubclass(source.dtype, self.dtype)
         if self.dtype != "object" and source.dtype != "object":
             if self.dtype != source.dtype and not (self.dtype == "float" and source.dtype in ("int", "bool")):
                 return False
@@ -75,9 +97,14 @@ class Spec:
     def coerce(self, value: Any, where: str) -> Any:
         """Return ``value`` converted to this spec (a float, int, bool or a fresh array).
 
-        Raises :class:`SpecError` naming ``where`` on a wrong shape, a wrong type or NaN.
+        Raises :class:`SpecError` naming ``where`` on a wrong shape, a wrong type or NaN. A
+        structured value is returned as it is, if it is an instance of the class.
         """
         if self.dtype == "object":
+            return value
+        if self.structured:
+            if not isinstance(value, self.dtype):
+                raise SpecError(f"{where}: expected a {self.dtype.__name__}, got {_short(value)}")
             return value
         try:
             if self.shape == () or (self.shape is None and np.ndim(value) == 0):
@@ -121,6 +148,9 @@ class Spec:
         """What is wrong with a computed value (type, shape, NaN), or None. Cheap when fine."""
         if self.dtype == "object":
             return None
+        if self.structured:
+            return None if isinstance(value, self.dtype) else \
+                f"computed a {type(value).__name__}, declared {self.dtype.__name__}"
         if (type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == self.shape
                 and self.dtype == "float"):  # the common case: the general path below, in short
             return "computed a value containing NaN" if has_nan(value) else None

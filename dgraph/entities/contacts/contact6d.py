@@ -10,7 +10,7 @@ import dgraph as dg
 from dgraph.entities.contacts.anchoring import AnchoredContact
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.contacts.wrench_cone import corner_force_metric, wrench_cone
-from dgraph.entities.robot.robot_state import LOCAL, FrameReader
+from dgraph.entities.robot.robot_state import LOCAL, FrameReader, RobotState
 from dgraph.entities.robot.rotations import MatrixRows, log3_product
 from dgraph.entities.tasks.gains import Gains
 
@@ -126,7 +126,7 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
     forces = dg.Param("corners", kind="str", choices=("corners", "wrench"),
                       doc="force variables: the 4 corner forces, or the 6D wrench in their wrench cone")
 
-    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+    robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
     kp = dg.Input(default=0.0, doc="drift-correction stiffness (scalar or 6)")
     kd = dg.Input(default=0.0, doc="drift-correction damping (scalar or 6)")
 
@@ -164,7 +164,7 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
             cached = self._anchor = (anchor, anchor.rotation.T.tolist(), anchor.translation.tolist())
         return cached[1], cached[2]
 
-    @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "anchor"))
+    @dg.output(dtype=ContactConstraint, depends=("robot", "kp", "kd", "active", "anchor"))
     def contact(self, t: int) -> ContactConstraint:
         """Motion rows, force generator and friction rows at ``t``: ``J a = -Kp e - Kd V - J_dot v``
         (Eq. 4.10 with the drift correction), ``e`` and the right-hand side in Python floats (six

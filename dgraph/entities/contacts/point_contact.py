@@ -7,7 +7,7 @@ import numpy as np
 import dgraph as dg
 from dgraph.entities.contacts.anchoring import AnchoredContact
 from dgraph.entities.contacts.constraint import ContactConstraint
-from dgraph.entities.robot.robot_state import WORLD, FrameReader
+from dgraph.entities.robot.robot_state import WORLD, FrameReader, RobotState
 from dgraph.entities.tasks.gains import Gains
 
 
@@ -61,7 +61,7 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
     max_normal_force = dg.Param(200.0, kind="float", minimum=0.0, doc="maximum normal force (N)")
     force_weight = dg.Param(1e-5, kind="float", minimum=0.0, doc="weight of ||f - f*||^2 in the cost")
 
-    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+    robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
     kp = dg.Input(default=0.0, doc="anchor stiffness (scalar or 3)")
     kd = dg.Input(default=0.0, doc="anchor damping (scalar or 3)")
     force_reference = dg.Input(shape=(3,), default=np.zeros(3), doc="f*: desired force on the robot (N, world)")
@@ -92,7 +92,7 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
         state = self.robot(t)
         return state.frame(self.frame_index(state), WORLD).translation
 
-    @dg.output(dtype="object", depends=("robot", "kp", "kd", "active", "force_reference", "anchor"))
+    @dg.output(dtype=ContactConstraint, depends=("robot", "kp", "kd", "active", "force_reference", "anchor"))
     def contact(self, t: int) -> ContactConstraint:
         """Motion rows, friction rows and the force reference at ``t``."""
         state = self.robot(t)

@@ -94,7 +94,7 @@ class ConfigurationIntegrator(dg.Entity):
         """The velocity the QP uses at ``t``."""
         return self.measured_v(t) if self._synchronising(t) else self.integrated_v(t)
 
-    @dg.output(dtype="object", depends=("q", "v", "command"))
+    @dg.output(dtype=tuple, depends=("q", "v", "command"))
     def next_state(self, t: int) -> tuple[np.ndarray, np.ndarray]:
         """``(q⁺, v⁺)``: one tick of integration of ``command(t)``."""
         return integration_step(self._integrate, self.q(t), self.v(t), self.command(t), self.dt,

@@ -19,11 +19,14 @@ from dgraph.entities.energy.power import (
     uncontrollable_power,
 )
 from dgraph.entities.energy.valves import TankLimits, Valves, overflow_valve, valves
+from dgraph.entities.named_inputs import declare_named_inputs
 from dgraph.entities.robot.robot_state import RobotState, unactuated_dofs
-from dgraph.entities.solvers.inverse_dynamics_qp import Passivity
+from dgraph.entities.solvers.inverse_dynamics_qp import Passivity, QPSolution
 from dgraph.entities.tasks.equation import TaskEquation
+from dgraph.signals.value_types import value_type
 
 
+@value_type
 @dataclass(slots=True)
 class TankStage:
     """Stage 1 of the passive controller at one tick (thesis §5.3.3, step (1))."""
@@ -122,12 +125,12 @@ class EnergyTank(dg.Entity):
     clamp = dg.Param(True, kind="bool", doc="keep E in [E_min, E_max], summing the correction")
     dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
 
-    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
-    solution = dg.Input(dtype="object", doc="the solver's solution (tau, contacts, forces), read after the solve")
+    robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
+    solution = dg.Input(dtype=QPSolution, doc="the solver's solution (tau, contacts, forces), read after the solve")
     energy = dg.State(shape=(), doc="tank energy E = s^2 / 2 (J)")
     correction = dg.State(shape=(), initial=0.0, doc="energy added by the clamp so far (J)")
-    history = dg.State(dtype="object", doc="Lambda K_P of the previous tick, per task (or stack)")
-    contact_wrenches = dg.State(dtype="object", doc="contact wrenches T_k f_k of the previous solution, by name")
+    history = dg.State(dtype=dict, doc="Lambda K_P of the previous tick, per task (or stack)")
+    contact_wrenches = dg.State(dtype=dict, doc="contact wrenches T_k f_k of the previous solution, by name")
 
     def configure(self) -> None:
         """Check the limits and declare one input per task and contact, and ``stage``."""
@@ -143,13 +146,9 @@ class EnergyTank(dg.Entity):
             raise dg.ParamError(f"{self.name}: band is wider than [minimum_energy, maximum_energy]", entity=self.name)
         self.limits = TankLimits(self.minimum_energy, self.maximum_energy, self.power_low, self.band)
         names = [*self.tasks, *self.contacts]
-        if len(set(names)) != len(names):
-            raise dg.ParamError(f"{self.name}: task and contact names must be unique: {names}", entity=self.name)
-        for name in names:
-            if not name.isidentifier() or hasattr(type(self), name):
-                raise dg.ParamError(f"{self.name}: {name!r} cannot name an input of the tank", entity=self.name)
-            self.declare(name, dg.Input(dtype="object", doc=f"equation or constraint {name}"))
-        self.declare("stage", dg.Output(type(self)._compute_stage, dtype="object",
+        declare_named_inputs(self, [(self.tasks, TaskEquation, "equation of task"),
+                                    (self.contacts, ContactConstraint, "constraint of contact")])
+        self.declare("stage", dg.Output(type(self)._compute_stage, dtype=TankStage,
                                         depends=("robot", *names, "energy", "history", "contact_wrenches"),
                                         doc="stage 1: storage, powers, valves, H_dot bound"))
 
@@ -166,12 +165,10 @@ class EnergyTank(dg.Entity):
         self._contact_inputs = [getattr(self, n) for n in self.contacts]
 
     # -- stage 1 ------------------------------------------------------------------------------
-    def _read(self, inp: dg.Input, kind: type, t: int) -> Any:
+    def _task_equation(self, inp: dg.Input, t: int) -> TaskEquation:
+        """``inp(t)``, which must carry the feature and gains a tank needs (a Task's equation)."""
         value = inp(t)
-        if not isinstance(value, kind):
-            raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: expected a {kind.__name__}, got "
-                               f"{type(value).__name__}", entity=self.name, signal=inp.name)
-        if kind is TaskEquation and (value.feature is None or value.kp is None or value.kd is None):
+        if value.feature is None or value.kp is None or value.kd is None:
             raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: the equation carries no feature and gains "
                                "(plug a Task's equation)", entity=self.name, signal=inp.name)
         return value
@@ -180,7 +177,7 @@ class EnergyTank(dg.Entity):
         """The active tasks' blocks, by name (or one stacked block keyed by the names)."""
         blocks = {}
         for inp in self._task_inputs:
-            equation = self._read(inp, TaskEquation, t)
+            equation = self._task_equation(inp, t)
             if equation.weight.any():
                 blocks[inp.name] = task_block(equation, velocity)
         if self.inertia == "stacked" and blocks:
@@ -205,7 +202,7 @@ class EnergyTank(dg.Entity):
         contact_power = 0.0
         wrenches = self.contact_wrenches(t)
         for inp in self._contact_inputs:
-            contact = self._read(inp, ContactConstraint, t)
+            contact = inp(t)
             if not contact.active:
                 continue
             twist = contact.jacobian @ v
@@ -219,7 +216,7 @@ class EnergyTank(dg.Entity):
         return TankStage(storage, storage_rate, controllable, uncontrollable, tank, bound, stiffnesses)
 
     # -- outputs -------------------------------------------------------------------------------
-    @dg.output(dtype="object", depends=("stage", "robot"))
+    @dg.output(dtype=Passivity, depends=("stage", "robot"))
     def passivity(self, t: int) -> Passivity:
         """Scale ``beta gamma`` and bound ``H_dot`` for a passive solver (scale 1, no bound when disabled)."""
         if not self.enabled:

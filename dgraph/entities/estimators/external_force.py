@@ -36,7 +36,7 @@ class ExternalForce(FrameReader, dg.Entity):
     frame = dg.Param(kind="str", doc="the sensor frame")
     payload_mass = dg.Param(None, kind="float", minimum=0.0, optional=True,
                             doc="mass beyond the sensor (kg; default: subtree of the frame's parent joint)")
-    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+    robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
     wrench = dg.Input(shape=(6,), doc="sensor reading [force, torque], sensor frame")
 
     @dg.output(shape=(), depends=("robot",))

@@ -16,11 +16,13 @@ from dgraph.entities.estimators.leg_odometry import (
 )
 from dgraph.entities.robot.robot_state import load_model
 from dgraph.entities.robot.rotations import matrix_to_quat, quat_to_rows
+from dgraph.signals.value_types import value_type
 
 _HEAD = 9
 """The floats before ``q`` in the estimate's array: ``x(t + 1)``, ``p~(t + 1)`` (the prediction state), ``v_WB``."""
 
 
+@value_type
 class Estimate:
     """Everything computed at one tick (the ``estimate`` output); read-only for readers."""
 
@@ -182,7 +184,7 @@ class FloatingBaseEstimator(dg.Entity):
         self._pending = []
 
     # -- the estimate -----------------------------------------------------------------------
-    @dg.output(dtype="object", depends=(
+    @dg.output(dtype=Estimate, depends=(
         "imu_orientation", "imu_angular_velocity", "imu_linear_acceleration", "encoder_position",
         "encoder_velocity", "ft_left_ankle", "ft_right_ankle", "anchor_left", "anchor_right",
         "anchored_left", "anchored_right", "prediction", "velocity_initialised"))

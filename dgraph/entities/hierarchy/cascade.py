@@ -59,6 +59,7 @@ import proxsuite
 from scipy.linalg import lapack
 
 from dgraph.entities.solvers.inverse_dynamics_qp import INFINITY, NOT_FINITE, SOLVED, proxqp_status
+from dgraph.signals.value_types import value_type
 
 
 @dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
@@ -90,6 +91,7 @@ class Level:
         return math.isfinite(square) and bool((self.lower <= self.upper).all())
 
 
+@value_type
 @dataclass(slots=True)
 class CascadeSolution:
     """The cascade's answer: ``x``, ``status`` (the codes of

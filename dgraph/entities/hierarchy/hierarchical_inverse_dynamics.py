@@ -11,7 +11,6 @@ from dgraph.entities.hierarchy.cascade import Level, LexicographicCascade
 from dgraph.entities.hierarchy.stack import StackCommands
 from dgraph.entities.solvers.inverse_dynamics import InverseDynamicsSolver
 from dgraph.entities.solvers.inverse_dynamics_qp import PRIMAL_INFEASIBLE, SOLVED, QPSolution
-from dgraph.entities.tasks.equation import TaskEquation
 
 
 @dg.register
@@ -93,7 +92,7 @@ class HierarchicalInverseDynamics(StackCommands, InverseDynamicsSolver):
         for names in self.read_stack(t):
             equations = []
             for name in names:
-                equation = self._value(getattr(self, name), TaskEquation, t)
+                equation = getattr(self, name)(t)
                 self._check_equation(name, equation, t)
                 equations.append(equation)
             scale = np.concatenate([np.sqrt(e.weight) for e in equations])
@@ -104,11 +103,11 @@ class HierarchicalInverseDynamics(StackCommands, InverseDynamicsSolver):
             levels.append(Level(key, matrix, vector, np.zeros((0, n)), np.zeros(0), np.zeros(0)))
         return levels
 
-    @dg.output(dtype="object", on_demand=True)  # reads only the tasks in the stack
+    @dg.output(dtype=QPSolution, on_demand=True)  # reads only the tasks in the stack
     def solution(self, t: int) -> QPSolution:
         """Solve the cascade at ``t`` (or fall back)."""
         state = self.robot(t)
-        contacts = [self._value(inp, ContactConstraint, t) for inp in self._contact_inputs]
+        contacts = [inp(t) for inp in self._contact_inputs]
         rows = [row for row, contact in enumerate(contacts) if contact.active]
         active = [contacts[r] for r in rows]
         ws = self._qp.assemble(state.mass_matrix, state.bias_forces, [], active)

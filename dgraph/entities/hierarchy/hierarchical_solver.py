@@ -8,6 +8,7 @@ import dgraph as dg
 from dgraph.entities.hierarchy.cascade import CascadeSolution, Level, LexicographicCascade
 from dgraph.entities.hierarchy.rows import PriorityRows
 from dgraph.entities.hierarchy.stack import StackCommands
+from dgraph.entities.named_inputs import declare_named_inputs
 from dgraph.entities.robot.robot_state import load_model
 
 
@@ -67,7 +68,7 @@ class HierarchicalSolver(StackCommands, dg.Entity):
     def configure(self) -> None:
         """Size ``v``, declare the task inputs and the stack."""
         self.nv = load_model(self.model, self.name).nv
-        declare_task_inputs(self, "rows of task")
+        declare_named_inputs(self, [(self.tasks, PriorityRows, "rows of task")], reserved=("stack",))
         self.declare_stack(self.priorities)
         self._cascade = LexicographicCascade(eps_abs=self.eps_abs, max_iterations=self.max_iterations,
                                              rank_tolerance=self.rank_tolerance, closed_form=self.closed_form)
@@ -81,9 +82,6 @@ class HierarchicalSolver(StackCommands, dg.Entity):
     def _rows(self, name: str, t: int) -> PriorityRows:
         """The task's rows, checked (``SpecError`` naming the input)."""
         rows = self._inputs[name](t)
-        if not isinstance(rows, PriorityRows):
-            raise dg.SpecError(f"{self.name}.{name} at tick {t}: expected PriorityRows (a task's rows output), got "
-                               f"{type(rows).__name__}", entity=self.name, signal=name)
         problem = rows.shape_problem(self.nv)
         if problem is not None:
             raise dg.SpecError(f"{self.name}.{name} at tick {t}: {problem} (the robot has nv = {self.nv})",
@@ -102,7 +100,7 @@ class HierarchicalSolver(StackCommands, dg.Entity):
                 places.append(place)
         return [*levels, self._minimum_norm], [*places, len(stack)]
 
-    @dg.output(dtype="object", on_demand=True)  # reads only the tasks in the stack
+    @dg.output(dtype=CascadeSolution, on_demand=True)  # reads only the tasks in the stack
     def solution(self, t: int) -> CascadeSolution:
         """The cascade's answer at ``t``."""
         levels, self._places = self._levels(t)
@@ -142,13 +140,3 @@ class HierarchicalSolver(StackCommands, dg.Entity):
         """Wall time of the cascade (s)."""
         return self.solution(t).solve_time
 
-
-def declare_task_inputs(entity: dg.Entity, what: str) -> None:
-    """One object input per name in ``entity.tasks`` (``ParamError`` for an unusable name)."""
-    names = list(entity.tasks)
-    if len(set(names)) != len(names):
-        raise dg.ParamError(f"{entity.name}: task names must be unique: {names}", entity=entity.name)
-    for name in names:
-        if not name.isidentifier() or hasattr(type(entity), name) or name == "stack":
-            raise dg.ParamError(f"{entity.name}: {name!r} cannot name an input of the solver", entity=entity.name)
-        entity.declare(name, dg.Input(dtype="object", doc=f"{what} {name}"))

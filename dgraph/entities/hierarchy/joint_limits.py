@@ -7,7 +7,7 @@ import numpy as np
 import dgraph as dg
 from dgraph.entities.activation import Activatable
 from dgraph.entities.hierarchy.rows import PriorityRows
-from dgraph.entities.robot.robot_state import load_model, plugged_model
+from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
 
 
 @dg.register
@@ -36,7 +36,7 @@ class JointLimits(Activatable, dg.Entity):
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="integration period in s (default: the graph's dt)")
     velocity_scale = dg.Param(1.0, kind="float", minimum=0.0, doc="fraction of the velocity limits allowed")
 
-    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+    robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
 
     def configure(self) -> None:
         """The one-dof joints and their limits."""
@@ -58,7 +58,7 @@ class JointLimits(Activatable, dg.Entity):
             return [f"its model has nv = {self.nv} but the plugged robot has nv = {model.nv}"]
         return []
 
-    @dg.output(dtype="object", depends=("robot", "active"))
+    @dg.output(dtype=PriorityRows, depends=("robot", "active"))
     def rows(self, t: int) -> PriorityRows:
         """``l <= S v <= u`` (see the class docstring)."""
         q = self.robot(t).q[self._q_index]

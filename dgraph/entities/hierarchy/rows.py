@@ -6,7 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dgraph.signals.value_types import value_type
 
+
+@value_type
 @dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
 class PriorityRows:
     """Equalities ``A x = b`` and inequalities ``l <= C x <= u`` over the solver's variables.

@@ -67,7 +67,7 @@ class StackCommands:
         if any(p < 0 for p in priorities):
             raise dg.ParamError(f"{self.name}: priorities must be >= 0", entity=self.name)
         self._checked_stack: Any = None
-        self.declare("stack", dg.Input(dtype="object", default=initial_stack(self.tasks, priorities),
+        self.declare("stack", dg.Input(dtype=tuple, default=initial_stack(self.tasks, priorities),
                                        doc="priority levels, highest first (tuples of task names)"))
 
     def _known(self, task: str) -> str:

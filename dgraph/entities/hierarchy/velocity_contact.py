@@ -23,7 +23,7 @@ class VelocityContact(Contact6d):
     Output (besides Contact6d's): ``rows`` (:class:`PriorityRows`, 6 equalities over ``v``).
     """
 
-    @dg.output(dtype="object", depends=("contact",))
+    @dg.output(dtype=PriorityRows, depends=("contact",))
     def rows(self, t: int) -> PriorityRows:
         """``J_c v = -kp e`` (no row while inactive)."""
         contact = self.contact(t)

@@ -6,9 +6,10 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.activation import Activatable
-from dgraph.entities.features.feature import FeatureValue, read_feature
+from dgraph.entities.features.feature import FeatureValue
 from dgraph.entities.hierarchy.adaptive_gain import adaptive_gain
 from dgraph.entities.hierarchy.rows import PriorityRows
+from dgraph.entities.robot.robot_state import RobotState
 from dgraph.entities.tasks.gains import Gains
 
 
@@ -39,8 +40,8 @@ class VelocityTask(Activatable, dg.Entity):
 
     adaptive = dg.Param(False, kind="bool", doc="use SoT's adaptive gain instead of a constant gain")
 
-    feature = dg.Input(dtype="object", doc="the feature's value (error, rate, Jacobian)")
-    robot = dg.Input(dtype="object", doc="the RobotModel's state the feature was evaluated at (for J v)")
+    feature = dg.Input(dtype=FeatureValue, doc="the feature's value (error, rate, Jacobian)")
+    robot = dg.Input(dtype=RobotState, doc="the RobotModel's state the feature was evaluated at (for J v)")
 
     def configure(self) -> None:
         """Declare the gain inputs."""
@@ -53,7 +54,7 @@ class VelocityTask(Activatable, dg.Entity):
         self._gains = Gains(self)
 
     def _feature(self, t: int) -> FeatureValue:
-        return read_feature(self, t)
+        return self.feature(t)
 
     @dg.output(shape=None)
     def gain_value(self, t: int) -> np.ndarray:
@@ -75,7 +76,7 @@ class VelocityTask(Activatable, dg.Entity):
         reference_velocity = f.jacobian @ self.robot(t).v - f.error_velocity
         return reference_velocity - self.gain_value(t) * f.error
 
-    @dg.output(dtype="object", depends=("feature", "desired_velocity", "active"))
+    @dg.output(dtype=PriorityRows, depends=("feature", "desired_velocity", "active"))
     def rows(self, t: int) -> PriorityRows:
         """``J v = x_dot* - lambda e`` (no row while inactive)."""
         return PriorityRows.equalities(self._feature(t).jacobian, self.desired_velocity(t), bool(self.active(t)))

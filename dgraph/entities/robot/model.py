@@ -111,7 +111,7 @@ class RobotModel(dg.Entity):
             for name, out in _frame_outputs(frame, self.pin_model.getFrameId(frame)).items():
                 self.declare(name, out)
 
-    @dg.output(dtype="object", depends=("q", "v"))
+    @dg.output(dtype=RobotState, depends=("q", "v"))
     def state(self, t: int) -> RobotState:
         """The shared Pinocchio pass at ``(q(t), v(t))``."""
         return RobotState(self.pin_model, self._fields, self.q(t), self.v(t))

@@ -23,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from dgraph.errors import DGraphError, ParamError
+from dgraph.signals.value_types import value_type
 
 WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 LOCAL = pin.ReferenceFrame.LOCAL
@@ -103,6 +104,7 @@ class DataFields:
         self.momentum_matrix, self.momentum_matrix_rate = _read_only(data.Ag), _read_only(data.dAg)
 
 
+@value_type
 class RobotState:
     """Kinematics and dynamics of ``model`` at ``(q, v)``, computed once.
 

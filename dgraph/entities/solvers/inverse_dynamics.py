@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 import dgraph as dg
 from dgraph.entities.contacts.constraint import ContactConstraint
+from dgraph.entities.named_inputs import declare_named_inputs
 from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model, unactuated_dofs
 from dgraph.entities.solvers.inverse_dynamics_qp import (
     DEFAULT_EPS_ABS,
@@ -70,7 +69,7 @@ class InverseDynamicsSolver(dg.Entity):
     fallback_damping = dg.Param(1.0, kind="float", minimum=0.0, doc="joint damping of the fallback torque")
     passive = dg.Param(False, kind="bool", doc="declare a passivity input (an energy tank's, Eq. 5.34)")
 
-    robot = dg.Input(dtype="object", doc="the RobotModel's shared state")
+    robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
 
     def configure(self) -> None:
         """Size the outputs from the model and declare one input per task and per contact."""
@@ -82,20 +81,11 @@ class InverseDynamicsSolver(dg.Entity):
         self._qp = InverseDynamicsQP(self.nv, self.n_unactuated, model.effortLimit[self.n_unactuated:],
                                      eps_abs=self.eps_abs, max_iterations=self.max_iterations,
                                      acceleration_weight=self.acceleration_weight)
-        names = list(self.tasks) + list(self.contacts)
-        if self.passive and "passivity" in names:
-            raise dg.ParamError(f"{self.name}: 'passivity' names the tank input of a passive solver", entity=self.name)
-        if len(set(names)) != len(names):
-            raise dg.ParamError(f"{self.name}: task and contact names must be unique: {names}", entity=self.name)
-        for name in names:
-            if not name.isidentifier() or hasattr(type(self), name):
-                raise dg.ParamError(f"{self.name}: {name!r} cannot name an input of the solver", entity=self.name)
-        for name in self.tasks:
-            self.declare(name, dg.Input(dtype="object", doc=f"equation of task {name}"))
-        for name in self.contacts:
-            self.declare(name, dg.Input(dtype="object", doc=f"constraint of contact {name}"))
+        declare_named_inputs(self, [(self.tasks, TaskEquation, "equation of task"),
+                                    (self.contacts, ContactConstraint, "constraint of contact")],
+                             reserved=("passivity",))
         if self.passive:
-            self.declare("passivity", dg.Input(dtype="object", doc="task scale and storage-rate bound of a tank"))
+            self.declare("passivity", dg.Input(dtype=Passivity, doc="task scale and storage-rate bound of a tank"))
 
     def setup(self) -> None:
         """Collect the task and contact inputs."""
@@ -111,16 +101,7 @@ class InverseDynamicsSolver(dg.Entity):
         return []
 
     def _read(self, t: int) -> tuple[list[TaskEquation], list[ContactConstraint]]:
-        tasks = [self._value(inp, TaskEquation, t) for inp in self._task_inputs]
-        return tasks, [self._value(inp, ContactConstraint, t) for inp in self._contact_inputs]
-
-    def _value(self, inp: dg.Input, kind: type, t: int) -> Any:
-        """``inp(t)``, which must be a ``kind`` (a ``SpecError`` naming the input otherwise)."""
-        value = inp(t)
-        if not isinstance(value, kind):
-            raise dg.SpecError(f"{self.name}.{inp.name} at tick {t}: expected a {kind.__name__}, got "
-                               f"{type(value).__name__}", entity=self.name, signal=inp.name)
-        return value
+        return [inp(t) for inp in self._task_inputs], [inp(t) for inp in self._contact_inputs]
 
     def _bad_equation(self, tasks: list[TaskEquation], t: int, cause: TaskRowsError) -> dg.SpecError:
         """The error naming the task input whose equation did not fit its block of the QP."""
@@ -159,13 +140,13 @@ class InverseDynamicsSolver(dg.Entity):
         tau = state.gravity_torque()[nu:] - self.fallback_damping * state.v[nu:]
         return np.clip(tau, -self._qp.effort_limit, self._qp.effort_limit)
 
-    @dg.output(dtype="object")
+    @dg.output(dtype=QPSolution)
     def solution(self, t: int) -> QPSolution:
         """Solve the QP at ``t`` (or fall back)."""
         state: RobotState = self.robot(t)
         tasks, contacts = self._read(t)
         active = [row for row, contact in enumerate(contacts) if contact.active]
-        passivity = self._value(self.passivity, Passivity, t) if self.passive else None
+        passivity = self.passivity(t) if self.passive else None
         active_contacts = [contacts[r] for r in active]
         relax = passivity is not None and not self._reachable(passivity)
         if relax:  # no torque within the limits delivers the bound: ProxQP would only run to its limit

@@ -48,6 +48,7 @@ import proxsuite
 
 from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.tasks.equation import TaskEquation
+from dgraph.signals.value_types import value_type
 
 INFINITY = 1e20
 """ProxQP's bound for 'no bound'."""
@@ -90,6 +91,7 @@ def proxqp_status(results: object) -> int:
     return status
 
 
+@value_type
 @dataclass(slots=True)
 class Passivity:
     """What a passive solve needs from an energy tank (thesis Eq. 5.34): the task scale
@@ -101,6 +103,7 @@ class Passivity:
     velocity: np.ndarray
 
 
+@value_type
 @dataclass(slots=True)
 class QPSolution:
     """The solver's answer at one tick.

@@ -60,7 +60,7 @@ class ZmpEstimator(dg.Entity):
     height = dg.Param(0.0, kind="float", doc="height of the ground plane (m)")
     min_normal_force = dg.Param(10.0, kind="float", minimum=0.0, doc="below it the ZMP is undefined (N)")
 
-    robot = dg.Input(dtype="object", doc="a RobotModel's state (measured configuration)")
+    robot = dg.Input(dtype=RobotState, doc="a RobotModel's state (measured configuration)")
 
     def configure(self) -> None:
         """One wrench input per sensor."""

@@ -7,8 +7,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from dgraph.entities.features.feature import FeatureValue
+from dgraph.signals.value_types import value_type
 
 
+@value_type
 @dataclass(slots=True)  # not frozen: a frozen dataclass costs 15x more to build; treat it as immutable
 class TaskEquation:
     """``matrix`` ``A`` (m x nv), ``vector`` ``b`` (m), ``weight`` ``w`` (m, >= 0).

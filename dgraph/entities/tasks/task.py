@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.features.feature import FeatureValue, read_feature
+from dgraph.entities.features.feature import FeatureValue
 from dgraph.entities.tasks.equation import TaskEquation
 from dgraph.entities.tasks.gains import Gains
 
@@ -34,7 +34,7 @@ class Task(dg.Entity):
 
     critical_damping = dg.Param(False, kind="bool", doc="use Kd = 2 sqrt(Kp) instead of a kd input")
 
-    feature = dg.Input(dtype="object", doc="the feature's value (error, rate, Jacobian, drift)")
+    feature = dg.Input(dtype=FeatureValue, doc="the feature's value (error, rate, Jacobian, drift)")
     kp = dg.Input(default=0.0, doc="proportional gain (scalar or per row)")
     weight = dg.Input(default=1.0, doc="task weight (scalar or per row)")
 
@@ -53,11 +53,11 @@ class Task(dg.Entity):
             self._critical = (kp, kd)
         return self._critical[1]
 
-    @dg.output(dtype="object")
+    @dg.output(dtype=TaskEquation)
     def equation(self, t: int) -> TaskEquation:
         """``A = J``, ``b = x_ddot_des - J_dot v``, per-row weights, and the feature and gains
         (the only output a solver reads: the gains and the desired acceleration come with it)."""
-        f = read_feature(self, t)
+        f = self.feature(t)
         size = len(f.error)
         gains = self._gain_vectors
         kp = gains.vector("kp", size, t)
@@ -65,7 +65,7 @@ class Task(dg.Entity):
         weight = gains.vector("weight", size, t)
         return TaskEquation(f.jacobian, pd_law(f, kp, kd) - f.drift, weight, f, kp, kd)
 
-    @dg.output(dtype="object", depends=("equation",))
+    @dg.output(dtype=tuple, depends=("equation",))
     def gains(self, t: int) -> tuple[np.ndarray, np.ndarray]:
         """``(Kp, Kd)`` as vectors of the feature's size."""
         equation = self.equation(t)

@@ -19,7 +19,7 @@ class FixedRows(dg.Entity):
     target = dg.Param(0.0, kind="float")
     active = dg.Input(shape=(), dtype="bool", default=True)
 
-    @dg.output(dtype="object")
+    @dg.output(dtype=PriorityRows)
     def rows(self, t):
         matrix = np.zeros((1, 6))
         matrix[0, self.index] = 1.0
