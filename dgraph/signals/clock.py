@@ -4,6 +4,11 @@ Reading any signal at a tick different from :attr:`Clock.t` advances the clock f
 invalidates the time-varying outputs (those declaring ``"t"`` in their dependencies) and
 releases periodic outputs whose hold has expired. Everything else becomes stale only when a
 source it depends on changes (a constant is set, a device commits its state).
+
+The clock also keeps the latest tick it reached (:attr:`Clock.latest`): a read at an earlier
+tick (by hand; the loop only moves forward) is a *past read*, which
+:meth:`Output._evaluate_past <dgraph.signals.signal.Output._evaluate_past>` checks so that no
+stamp moves backwards.
 """
 
 from __future__ import annotations
@@ -13,12 +18,17 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from dgraph.signals.signal import Output
 
+BEFORE_TIME = -(2**63)
+"""The :attr:`Clock.latest` of a clock nothing was read on yet (an int below any tick)."""
+
 
 class Clock:
     """Current tick and switches shared by every signal of a graph.
 
     Attributes:
         t: the last tick at which a signal was read (``None`` before the first read).
+        latest: the latest tick at which a signal was read (:data:`BEFORE_TIME` before the first
+            read); every stamp computed on this clock is at most this.
         cache_enabled: when False every read recomputes (for validating the cache).
         check_values: check each computed value against its spec (shape, NaN); a debugging aid, off by
             default (shapes are checked at plug time; devices and solvers check what they consume).
@@ -26,10 +36,12 @@ class Clock:
         inner: profiling accumulator of the time spent in nested computations.
     """
 
-    __slots__ = ("cache_enabled", "check_values", "held", "inner", "periodic", "profiling", "t", "time_varying")
+    __slots__ = ("cache_enabled", "check_values", "held", "inner", "latest", "periodic", "profiling", "t",
+                 "time_varying")
 
     def __init__(self) -> None:
         self.t: int | None = None
+        self.latest = BEFORE_TIME
         self.time_varying: list[Output] = []
         self.periodic: list[Output] = []
         self.held: list[Output] = []
@@ -41,8 +53,10 @@ class Clock:
     def advance(self, t: int) -> None:
         """Move to tick ``t``: invalidate time-varying outputs, release the holds of periodic
         outputs whose window has ended, then stamp ``t`` on periodic outputs still valid at the
-        start of a window (that is the window's sample)."""
+        start of a window (that is the window's sample). Moving back leaves :attr:`latest`."""
         self.t = t
+        if t > self.latest:
+            self.latest = t
         for output in self.time_varying:
             output.invalidate()
         if self.held:

@@ -106,6 +106,16 @@ class Output(Signal):
     changed since; never more than once per tick. With ``period=N`` it recomputes at most once
     per window ``[kN, (k+1)N)``, sampled by the device loop at the window start. Counters:
     ``count`` (computations), ``total_duration`` (seconds, exclusive, when profiling).
+
+    Time stamps never move backwards. A read at a tick earlier than the latest tick of its
+    clock (by hand: the loop only moves forward) serves a fresh output from its cache, as any
+    read; a stale one whose stamp is later than the tick read raises
+    :class:`~dgraph.errors.DGraphError` naming it, the tick read and its stamp (its inputs
+    changed since: the graph keeps no history to compute its past value from), and nothing is
+    computed. The exception is an output declaring ``"t"`` (time-varying): it is a function of
+    the tick, evaluated at the tick read (a reference is sampled anywhere on its horizon, as
+    ``MinimumJerk`` is written to answer). The check costs one integer comparison on the stale
+    path (:meth:`_evaluate`); cached reads are untouched.
     """
 
     __slots__ = (
@@ -191,10 +201,14 @@ class Output(Signal):
         (:meth:`_cached_order`); when few of them are (a large graph of constants), or the
         upstream has periodic outputs or outputs on another clock, it searches for the stale ones
         (:meth:`_stale_upstream`, whose cost is the number found). A periodic output already
-        sampled in this window holds, unless ``force``."""
+        sampled in this window holds, unless ``force``. A read at a tick earlier than the
+        clock's latest is checked by :meth:`_evaluate_past`."""
         if self.period > 1 and not force and self._holds(t):
             return self._hold()
-        if self._clock.cache_enabled:  # with the cache off every read recomputes: nothing to prepare
+        clock = self._clock
+        if t < clock.latest:  # a past read, by hand: the only one that could move a stamp back
+            return self._evaluate_past(t)
+        if clock.cache_enabled:  # with the cache off every read recomputes: nothing to prepare
             order = self._order if self._order_version == _STRUCTURE[0] else self._cached_order()
             if order is not None and self._dense:
                 computed = 0
@@ -213,6 +227,25 @@ class Output(Signal):
                                 node._compute(t)
                         self._dense = order is not None and len(found) * DENSE_FRACTION >= len(order)
                         break
+        return self._compute(t)
+
+    def _evaluate_past(self, t: int) -> Any:
+        """A read at a tick earlier than the clock's latest: the stale outputs it needs (searched,
+        :meth:`_stale_upstream`) and itself are computed at ``t`` unless one of them that is not
+        time-varying is stamped later than ``t``: then it raises, naming that one, before
+        computing anything. Outputs read on demand or on another clock check themselves. With
+        the cache off every read recomputes (a debugging aid): nothing tells what changed, so
+        nothing is checked."""
+        if not self._clock.cache_enabled:
+            return self._compute(t)
+        needed = self._stale_upstream(t)
+        for node in (*needed, self):
+            stamp = node._time
+            if stamp is not None and t < stamp and not node.time_varying:
+                raise _past_tick_error(node, t, stamp)
+        for node in needed:
+            if node._stale:  # an on-demand read in an earlier method may have computed it
+                node._compute(t)
         return self._compute(t)
 
     def _cached_order(self) -> list[Output] | None:
@@ -390,6 +423,14 @@ class Output(Signal):
     def plugged_inputs(self) -> list[Input]:
         """The inputs this output feeds."""
         return list(self._plugged)
+
+
+def _past_tick_error(output: Output, t: int, stamp: int) -> DGraphError:
+    """The error of a stale ``output`` stamped ``stamp`` read at the earlier tick ``t``."""
+    return DGraphError(f"{output.full_name} was read at tick {t}, but it is stamped {stamp} and something "
+                       f"it depends on changed since: time stamps never move backwards (the graph keeps no "
+                       f"history to compute tick {t} from)", entity=output.entity.name if output.entity else None,
+                       signal=output.name)
 
 
 def _invalidate_all(nodes: list[Output]) -> None:

@@ -146,6 +146,51 @@ def test_reading_at_an_earlier_tick_recomputes(graph):
     assert c.now(2) == 2.0
 
 
+def test_a_past_read_never_moves_a_stamp_back(graph):
+    """y(5), a change, y(4): refused, naming y and both ticks; nothing is recomputed."""
+    a = graph.add(Scale("a"))
+    a.u.set(1.0)
+    assert a.y(5) == 2.0
+    a.u.set(3.0)
+    with pytest.raises(dg.DGraphError, match=r"a\.y was read at tick 4, but it is stamped 5") as err:
+        a.y(4)
+    assert (err.value.entity, err.value.signal) == ("a", "y")
+    assert (a.y.time, a.y.value, a.y.count) == (5, 2.0, 1)
+    assert a.y(5) == 6.0 and a.y(6) == 6.0 and (a.y.time, a.y.count) == (5, 2)  # forward as ever
+
+
+def test_a_past_read_is_refused_for_an_upstream_output_stamped_later(graph):
+    a, b = graph.add(Scale("a"), Scale("b"))
+    graph.plug("a.y", "b.u")
+    a.u.set(1.0)
+    assert b.y(3) == 4.0
+    a.u.set(2.0)
+    assert a.y(5) == 4.0  # a is stamped 5, b (stale) still 3
+    a.u.set(3.0)
+    with pytest.raises(dg.DGraphError, match=r"a\.y was read at tick 4, but it is stamped 5"):
+        b.y(4)
+    assert (a.y.time, a.y.count, b.y.time, b.y.count) == (5, 2, 3, 1)
+    assert b.y(5) == 12.0 and (a.y.time, b.y.time) == (5, 5)
+
+
+def test_a_past_read_of_a_fresh_output_is_served_from_its_cache(graph):
+    a = graph.add(Scale("a"))
+    a.u.set(1.0)
+    assert a.y(5) == 2.0
+    assert a.y(4) == 2.0 and (a.y.time, a.y.count) == (5, 1)
+
+
+def test_a_time_varying_output_is_evaluated_at_an_earlier_tick_but_not_what_reads_it(graph):
+    """A function of the tick is sampled anywhere; an output computed from it keeps its stamp."""
+    c, d = graph.add(Clocked("c"), Scale("d"))
+    graph.plug("c.now", "d.u")
+    assert d.y(5) == 10.0
+    assert c.now(3) == 3.0 and c.now.time == 3
+    with pytest.raises(dg.DGraphError, match=r"d\.y was read at tick 3, but it is stamped 5"):
+        d.y(3)
+    assert (d.y.time, d.y.value) == (5, 10.0)
+
+
 def test_plug_and_unplug_invalidate_and_unplug_falls_back_to_default(graph):
     a, s = graph.add(Scale("a"), Sum2("s"))
     a.u.set(1.0)
