@@ -1,7 +1,8 @@
 """The ``dgraph`` command: run, check and draw graph files, list entity types.
 
     dgraph run FILE [--duration S | --ticks N] [--set entity.name=value ...]
-                    [--rerun save PATH | spawn | serve | off] [--npz PATH] [--debug-checks]
+                    [--rerun save PATH | spawn | serve | off] [--rerun-bind ADDRESS]
+                    [--npz PATH] [--debug-checks]
     dgraph check FILE
     dgraph profile FILE [--ticks N] [--set entity.name=value ...]
     dgraph show FILE --format dot|mermaid [--signals] [-o OUT]
@@ -84,10 +85,19 @@ def _rerun_mode(option: list[str], stem: str) -> tuple[str, str | None]:
                          file="<command line>")
 
 
+def _serve_address(args: argparse.Namespace) -> None:
+    """``--rerun-bind``: the address ``serve`` sinks listen on (loopback unless given)."""
+    if args.rerun_bind is not None:
+        from dgraph.entities.recording.rerun_stream import set_serve_address
+
+        set_serve_address(args.rerun_bind)
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     """Load, validate and run a graph file, then report what was written."""
     import dgraph
 
+    _serve_address(args)
     overrides = {**_recorder_overrides(args.file, args), **_parse_sets(args.set)}
     graph = dgraph.load(args.file, overrides)
     graph.validate()
@@ -182,6 +192,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="override a parameter or set an input constant (repeatable)")
     run.add_argument("--rerun", nargs="+", metavar="MODE",
                      help="save [PATH] (default out/NAME.rrd), spawn, serve or off")
+    run.add_argument("--rerun-bind", metavar="ADDRESS",
+                     help="IP address that --rerun serve listens on (default 127.0.0.1, this machine only; "
+                          "0.0.0.0 or :: opens the gRPC server and the web viewer to the network)")
     run.add_argument("--npz", help="also write the recorded signals to this .npz file")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     run.add_argument("--debug-checks", action="store_true",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -139,6 +140,25 @@ def test_rerun_option_before_the_file_and_file_settings_kept(tmp_path):
                                 "{signals: [robot.q], rrd_path: mine/rec.rrd}}\n"))
     assert main(["run", str(own), "--ticks", "5"]) == 0  # no --rerun: the file's own path is used
     assert (tmp_path / "mine" / "rec.rrd").exists() and not (tmp_path / "out").exists()
+
+
+def test_rerun_bind_chooses_where_serve_listens(monkeypatch, capsys):
+    from dgraph.entities.recording import rerun_stream
+    from tests.entities.test_rerun_stream import listening
+
+    assert rerun_stream.SERVE.bind == "127.0.0.1"  # without the option: this machine only
+    with socket.socket() as a, socket.socket() as b:  # two ports free just now
+        a.bind(("127.0.0.1", 0))
+        b.bind(("127.0.0.1", 0))
+        grpc, web = a.getsockname()[1], b.getsockname()[1]
+    monkeypatch.setattr(rerun_stream, "SERVE", rerun_stream.ServeAddress(grpc_port=grpc, web_port=web))
+    assert main(["run", PD, "--ticks", "5", "--rerun", "serve", "--rerun-bind", "127.0.0.2", "-q"]) == 0
+    assert rerun_stream.SERVE == rerun_stream.ServeAddress("127.0.0.2", grpc, web)
+    assert f"rerun: web viewer at http://127.0.0.2:{web}/?url=rerun%2Bhttp%3A%2F%2F127.0.0.2%3A{grpc}" \
+           in capsys.readouterr().err
+    assert listening(grpc) == set() and listening(web) == set()  # the run is over: so is the server
+    assert main(["run", PD, "--ticks", "5", "--rerun", "serve", "--rerun-bind", "everywhere"]) == 2
+    assert "'everywhere': not an IP address" in capsys.readouterr().err
 
 
 def test_run_a_10000_deep_chain(tmp_path):

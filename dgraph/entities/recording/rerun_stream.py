@@ -1,8 +1,9 @@
 """A thin wrapper over a Rerun recording stream: time series sent in columns.
 
 Rerun is imported only when a stream is opened. Sinks: ``save`` (an .rrd file, the default
-when headless), ``spawn`` (a local viewer process) and ``serve`` (gRPC plus a web viewer on
-loopback). Series are sent in blocks of ticks, every series of a block in one Arrow record batch
+when headless), ``spawn`` (a local viewer process) and ``serve`` (a gRPC server and a web viewer,
+listening on loopback unless :func:`set_serve_address` says otherwise; see :class:`RerunServer`).
+Series are sent in blocks of ticks, every series of a block in one Arrow record batch
 (one ``send_record_batch`` call: Rerun's cost is per call and per entity, not per row), so
 logging costs a few µs per tick instead of ~37 µs per ``log`` call.
 
@@ -14,24 +15,174 @@ one recording; the last user's :meth:`RerunStream.close` flushes and closes the 
 
 from __future__ import annotations
 
+import ipaddress
+import os
 import re
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import weakref
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
+from urllib.parse import quote
 
 import numpy as np
 
 from dgraph.errors import GraphError
 
 
+@dataclass(frozen=True)
+class ServeAddress:
+    """Where the ``serve`` sink listens: its gRPC server and its web viewer, both bound to
+    ``bind`` (an IP address: loopback by default, ``0.0.0.0`` or ``::`` for every interface)."""
+
+    bind: str = "127.0.0.1"
+    grpc_port: int = 9876
+    web_port: int = 9090
+
+    def local_host(self) -> str:
+        """The address this machine reaches the servers at (loopback for a wildcard bind)."""
+        if ipaddress.ip_address(self.bind).is_unspecified:
+            return "::1" if ":" in self.bind else "127.0.0.1"
+        return self.bind
+
+    def public_host(self) -> str:
+        """The host a browser is pointed at: the bind address, or this machine's name for a wildcard bind."""
+        return socket.gethostname() if ipaddress.ip_address(self.bind).is_unspecified else self.bind
+
+
+SERVE = ServeAddress()
+"""What the ``serve`` sink opens (:func:`set_serve_address`; ``dgraph run --rerun-bind``)."""
+
+
+def set_serve_address(bind: str, grpc_port: int | None = None, web_port: int | None = None) -> ServeAddress:
+    """Make the ``serve`` sinks opened from now on listen on ``bind`` (an IP address), and on
+    these ports if given (else the ports set before)."""
+    global SERVE
+    try:
+        ipaddress.ip_address(bind)
+    except ValueError:
+        raise GraphError(f"Rerun serve address {bind!r}: not an IP address (127.0.0.1, 0.0.0.0, ::...)") from None
+    SERVE = ServeAddress(bind, SERVE.grpc_port if grpc_port is None else grpc_port,
+                         SERVE.web_port if web_port is None else web_port)
+    return SERVE
+
+
+class RerunServer:
+    """A ``rerun --serve-web`` process: Rerun's gRPC server and web viewer on ``address``.
+
+    The SDK's own ``serve_grpc`` and ``serve_web_viewer`` listen on every interface (0.0.0.0) and
+    take no address, so ``serve`` runs the Rerun command line, which binds where it is told, and
+    the recording connects to it. It is started here, waited for until both ports accept
+    connections, and stopped by :meth:`stop` (at the latest when this object is collected or the
+    interpreter exits).
+    """
+
+    def __init__(self, address: ServeAddress, timeout: float = 10.0):
+        self.address = address
+        for port in (address.grpc_port, address.web_port):
+            _check_free(address.bind, port)
+        self._log: IO[bytes] = tempfile.TemporaryFile()
+        command = [rerun_binary(), "--serve-web", "--bind", address.bind, "--port", str(address.grpc_port),
+                   "--web-viewer-port", str(address.web_port)]
+        self._process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=self._log, stderr=self._log)
+        self._stop = weakref.finalize(self, _stop_process, self._process)
+        self._wait_listening(timeout)
+        self.grpc_url = f"rerun+http://{_url_host(address.local_host())}:{address.grpc_port}/proxy"
+        public = _url_host(address.public_host())
+        self.viewer_url = (f"http://{public}:{address.web_port}/?url="
+                           + quote(f"rerun+http://{public}:{address.grpc_port}/proxy", safe=""))
+
+    def _wait_listening(self, timeout: float) -> None:
+        """Return when both ports accept connections; raise if the process exits or is too slow."""
+        deadline = time.monotonic() + timeout
+        pending = [self.address.grpc_port, self.address.web_port]
+        while pending:
+            if self._process.poll() is not None:
+                raise self._failure(f"exited with status {self._process.returncode}")
+            if time.monotonic() > deadline:
+                self.stop()
+                raise self._failure(f"is not listening after {timeout:g} s")
+            pending = [port for port in pending if not _accepts(self.address.local_host(), port)]
+            if pending:
+                time.sleep(0.02)
+
+    def _failure(self, what: str) -> GraphError:
+        self._log.seek(0)
+        lines = self._log.read().decode(errors="replace").strip().splitlines()
+        said = re.sub(r"\x1b\[[0-9;]*m", "", lines[-1]) if lines else "(it printed nothing)"
+        a = self.address
+        return GraphError(f"the Rerun server (rerun --serve-web on {a.bind}, ports {a.grpc_port} and "
+                          f"{a.web_port}) {what}: {said}")
+
+    def stop(self) -> None:
+        """Stop the server (once; later calls do nothing)."""
+        self._stop()
+
+
+def rerun_binary() -> str:
+    """The ``rerun`` executable of the installed rerun-sdk (``RERUN_CLI_PATH`` overrides it), not
+    the Python wrapper script, which would survive being stopped."""
+    if "RERUN_CLI_PATH" in os.environ:
+        return os.environ["RERUN_CLI_PATH"]
+    import rerun_cli
+
+    path = Path(rerun_cli.__file__).parent / ("rerun.exe" if sys.platform.startswith("win") else "rerun")
+    if not path.is_file():
+        raise GraphError(f"the Rerun command line is missing from the rerun-sdk install ({path})")
+    return str(path)
+
+
+def _stop_process(process: subprocess.Popen[bytes]) -> None:
+    if process.poll() is None:
+        process.terminate()
+        try:
+            process.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+def _check_free(bind: str, port: int) -> None:
+    """Raise if ``port`` cannot be bound on ``bind`` (something listens there already: the wait
+    for the server would otherwise take that listener for it)."""
+    family = socket.AF_INET6 if ":" in bind else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind((bind, port))
+        except OSError as exc:
+            raise GraphError(f"Rerun serve: cannot listen on {_url_host(bind)}:{port} ({exc.strerror}; another "
+                             "Rerun server or viewer?)") from None
+
+
+def _accepts(host: str, port: int) -> bool:
+    try:
+        socket.create_connection((host, port), timeout=0.2).close()
+    except OSError:
+        return False
+    return True
+
+
+def _url_host(host: str) -> str:
+    return f"[{host}]" if ":" in host else host
+
+
 class RerunStream:
     """One Rerun recording with a ``tick`` sequence timeline and a ``time`` duration timeline."""
 
-    def __init__(self, application_id: str, mode: str, rrd_path: str | None, dt: float):
+    def __init__(self, application_id: str, mode: str, rrd_path: str | None, dt: float,
+                 serve: ServeAddress | None = None):
         import rerun as rr
 
         self._rr = rr
         self.dt = dt
         self.url: str | None = None
+        self.viewer_url: str | None = None
+        self._server: RerunServer | None = None
         self.rec = rr.RecordingStream(application_id)
         if mode == "save":
             try:
@@ -42,13 +193,20 @@ class RerunStream:
         elif mode == "spawn":
             self.rec.spawn()
         elif mode == "serve":
-            self.url = self.rec.serve_grpc()
-            rr.serve_web_viewer(open_browser=False, connect_to=self.url)
+            self._serve(SERVE if serve is None else serve)
         self._series_fields: dict[str, Any] = {}  # the Arrow field of each series sent, by entity path
         self.users = 1
         self.application_id = application_id
         self.owner: object = None
         self._key: tuple[str, str] | None = None
+
+    def _serve(self, address: ServeAddress) -> None:
+        """Start the server on ``address``, connect the recording to it, print the viewer's URL."""
+        self._server = RerunServer(address)
+        self.url, self.viewer_url = self._server.grpc_url, self._server.viewer_url
+        self.rec.connect_grpc(self.url)
+        print(f"rerun: web viewer at {self.viewer_url} (gRPC {self.url}, listening on {address.bind})",
+              file=sys.stderr, flush=True)
 
     def indexes(self, ticks: np.ndarray) -> list[Any]:
         """The ``tick`` and ``time`` time columns of ``ticks``."""
@@ -87,8 +245,12 @@ class RerunStream:
             return
         if self._key is not None and _OPEN.get(self._key) is self:
             del _OPEN[self._key]
-        self.rec.flush()
-        self.rec.disconnect()
+        try:
+            self.rec.flush()
+            self.rec.disconnect()
+        finally:
+            if self._server is not None:
+                self._server.stop()
 
 
 def index_fields() -> list[Any]:
