@@ -110,9 +110,9 @@ class Output(Signal):
     Time stamps never move backwards. A read at a tick earlier than the latest tick of its
     clock (by hand: the loop only moves forward) serves a fresh output from its cache, as any
     read; a stale one whose stamp is later than the tick read raises
-    :class:`~dgraph.errors.DGraphError` naming it, the tick read and its stamp (its inputs
-    changed since: the graph keeps no history to compute its past value from), and nothing is
-    computed. The exception is an output declaring ``"t"`` (time-varying): it is a function of
+    :class:`~dgraph.errors.DGraphError` naming it, the tick read and its stamp (something it
+    depends on changed since: the graph keeps no history to compute its past value from), and
+    nothing is computed. The exception is an output declaring ``"t"`` (time-varying): it is a function of
     the tick, evaluated at the tick read (a reference is sampled anywhere on its horizon, as
     ``MinimumJerk`` is written to answer). The check costs one integer comparison on the stale
     path (:meth:`_evaluate`); cached reads are untouched.
