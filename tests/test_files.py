@@ -40,18 +40,36 @@ def test_load_builds_the_described_graph():
     g.validate()
 
 
-@pytest.mark.parametrize("path", sorted((ROOT / "graphs").glob("*.yaml")), ids=lambda p: p.name)
-def test_load_save_load_is_a_fixed_point(path, tmp_path):
+GRAPH_FILES = sorted((ROOT / "graphs").rglob("*.yaml"))
+
+
+@pytest.mark.parametrize("path", GRAPH_FILES, ids=lambda p: str(p.relative_to(ROOT / "graphs")))
+def test_load_save_elsewhere_load_save_is_a_fixed_point(path, tmp_path):
+    """Saved to one folder, loaded, saved to another: the same text, and the same graph."""
     first = dg.load(path)
-    dg.save(first, tmp_path / "a.yaml")
-    second = dg.load(tmp_path / "a.yaml")
-    dg.save(second, tmp_path / "b.yaml")
-    assert (tmp_path / "a.yaml").read_text() == (tmp_path / "b.yaml").read_text()
+    for folder in ("a", "b"):
+        (tmp_path / folder).mkdir()
+    dg.save(first, tmp_path / "a" / "x.yaml")
+    second = dg.load(tmp_path / "a" / "x.yaml")
+    dg.save(second, tmp_path / "b" / "y.yaml")
+    assert (tmp_path / "a" / "x.yaml").read_text() == (tmp_path / "b" / "y.yaml").read_text()
     assert first.plugs() == second.plugs() and list(first.entities) == list(second.entities)
     for name, e in first.entities.items():
         assert second[name].type_name == e.type_name
         for key, value in e.params.items():
             assert np.array_equal(np.asarray(second[name].params[key], dtype=object), np.asarray(value, dtype=object))
+
+
+def test_a_saved_graph_reads_its_data_files_from_another_folder(tmp_path):
+    """A path parameter is written relative to the saved file: the copy finds the CSV."""
+    graph = dg.load(ROOT / "graphs" / "talos_push_tank.yaml")
+    dg.save(graph, tmp_path / "copy.yaml")
+    written = tmp_path.joinpath("copy.yaml").read_text()
+    relative = os.path.relpath(ROOT / "graphs" / "data" / "push_force.csv", tmp_path)
+    assert f"path: {relative}" in written and not Path(relative).is_absolute()
+    copy = dg.load(tmp_path / "copy.yaml")
+    assert Path(copy["force_reference"].params["path"]).resolve() == (ROOT / "graphs" / "data" / "push_force.csv")
+    assert np.array_equal(copy["force_reference"].position(3000), graph["force_reference"].position(3000))
 
 
 def test_a_saved_graph_runs_the_same(tmp_path):
@@ -259,17 +277,15 @@ EXTENSION_ERRORS = [
     # (derived text, line, message fragment)
     ("extends: base.yaml\nname: x\noverrides:\n  k.gain: 3.0\n  nope.gain: 1.0\n", 5, "no entity 'nope' in"),
     ("name: x\nextends: missing.yaml\n", 2, "cannot extend 'missing.yaml'"),
-    ("extends: base.yaml\nentities:\n  k: {type: Gain}\n", 2, "unknown key 'entities' (allowed: extends, name"),
-    ("extends: base.yaml\ndt: 0.1\n", 2, "unknown key 'dt'"),
+    ("extends: base.yaml\nentitys:\n  k: {type: Gain}\n", 2, "unknown key 'entitys' (allowed: name, dt"),
+    ("extends: base.yaml\ndt: -0.1\n", 2, "-0.1 is less than or equal to the minimum of 0"),
     ("extends: base.yaml\noverrides:\n  kgain: 1.0\n", 3, "'kgain' must read 'entity.signal'"),
-    ("extends: unparsable.yaml\n", 1, "cannot extend 'unparsable.yaml'"),
 ]
 
 
 @pytest.mark.parametrize(("text", "line", "fragment"), EXTENSION_ERRORS)
 def test_errors_of_a_derived_file_point_at_its_lines(text, line, fragment, tmp_path):
     write(tmp_path, "base.yaml", BASE)
-    write(tmp_path, "unparsable.yaml", "entities: {a: {type: Gain}\n")
     derived = write(tmp_path, "derived.yaml", text)
     with pytest.raises(dg.GraphFileError) as info:
         dg.load(derived)
@@ -292,6 +308,11 @@ def test_an_error_in_the_base_file_names_the_base_and_its_line(tmp_path):
     derived = write(tmp_path, "derived.yaml", "extends: bad_base.yaml\n")
     with pytest.raises(dg.GraphFileError, match=r"bad_base\.yaml:6.*unknown entity type 'Gian'"):
         dg.load(derived)
+    unparsable = write(tmp_path, "unparsable.yaml", "entities: {a: {type: Gain}\n")
+    derived.write_text("name: x\nextends: unparsable.yaml\n")
+    with pytest.raises(dg.GraphFileError, match="invalid YAML") as info:
+        dg.load(derived)
+    assert (info.value.file, info.value.line) == (str(unparsable), 2)
 
 
 def test_a_cycle_of_files_extending_one_another_is_refused(tmp_path):
@@ -331,3 +352,216 @@ def test_the_push_graph_without_tank_is_the_tank_graph_with_the_tank_disabled():
     assert no_tank.duration == tank.duration == 20.0
     assert list(no_tank.entities) == list(tank.entities) and no_tank.plugs() == tank.plugs()
     assert tank["tank"].params["enabled"] is True and no_tank["tank"].params["enabled"] is False
+
+
+# -- composition: a scenario adds, replaces and removes what its base has --------------------
+
+COMPOSED_BASE = """\
+dt: 0.01
+entities:
+  dev: {type: KinematicDevice, params: {size: 2}}
+  ref: {type: Constant, params: {value: [1.0, 2.0]}}
+  err: {type: Add, params: {size: 2, coefficients: [1.0, -1.0]}}
+  k:   {type: Gain, params: {size: 2}}
+plugs:
+  - ref.output -> err.in0
+  - dev.q -> err.in1
+  - err.output -> k.input
+  - k.output -> dev.control
+set:
+  k.gain: 2.0
+record: [dev.q, err.output, k.output]
+"""
+
+
+def scenario(tmp_path: Path, text: str, base: str = COMPOSED_BASE) -> Path:
+    write(tmp_path, "base.yaml", base)
+    return write(tmp_path, "scenario.yaml", "extends: base.yaml\n" + text)
+
+
+def test_a_scenario_adds_entities_plugs_settings_and_records(tmp_path):
+    g = dg.load(scenario(tmp_path, "entities:\n  bias: {type: Constant, params: {value: 0.5}}\n"
+                                   "  sum: {type: Add, params: {size: 2}}\n"
+                                   "plugs: [k.output -> sum.in0]\nset: {sum.in1: [0.0, 1.0]}\nrecord: [sum.output]\n"))
+    assert list(g.entities) == ["dev", "ref", "err", "k", "bias", "sum", "recorder"]
+    assert ("k.output", "sum.in0") in g.plugs() and np.array_equal(g["sum.in1"].value, [0.0, 1.0])
+    assert g["recorder"].signals == ["dev.q", "err.output", "k.output", "sum.output"]
+    assert g["k.gain"].value == 2.0 and g.name == "scenario"  # no file names it: the scenario's stem
+
+
+def test_an_entity_of_the_base_is_replaced_in_its_place_with_its_plugs_settings_and_records(tmp_path):
+    g = dg.load(scenario(tmp_path, "entities:\n  ref: {type: Sinusoid, params: {amplitude: [0.1, 0.1],"
+                                   " frequency: 1.0, offset: [1.0, 2.0]}}\n  k: {type: Gain, params: {size: 2}}\n"))
+    assert list(g.entities) == ["dev", "ref", "err", "k", "recorder"]
+    assert g["ref"].type_name == "Sinusoid" and ("ref.output", "err.in0") in g.plugs()
+    assert g["k.gain"].value == 2.0 and "k.output" in g["recorder"].signals
+
+
+def test_removing_an_entity_removes_its_plugs_settings_and_records(tmp_path):
+    g = dg.load(scenario(tmp_path, "remove:\n  entities: [k]\n"))
+    assert "k" not in g.entities and all("k." not in f"{a} {b}" for a, b in g.plugs())
+    assert g["recorder"].signals == ["dev.q", "err.output"] and g["dev.control"].source is None
+    g = dg.load(scenario(tmp_path, "remove: {entities: [k]}\nentities:\n  k: {type: Gain, params: {size: 2}}\n"))
+    assert list(g.entities) == ["dev", "ref", "err", "k", "recorder"]  # k is new: after the base's
+    assert g["k.gain"].value == 1.0 and g["k.input"].source is None  # a new entity: nothing of the old one
+
+
+def test_remove_takes_plugs_by_text_or_input_settings_and_records(tmp_path):
+    g = dg.load(scenario(tmp_path, "remove:\n  plugs: [ref.output -> err.in0, dev.control]\n"
+                                   "  set: [k.gain]\n  record: [err.output]\n"))
+    assert ("ref.output", "err.in0") not in g.plugs() and g["dev.control"].source is None
+    assert not g["k.gain"].is_set and g["recorder"].signals == ["dev.q", "k.output"]
+    assert ("dev.q", "err.in1") in g.plugs()
+
+
+def test_a_plug_or_a_setting_of_an_input_replaces_what_the_base_gave_it(tmp_path):
+    g = dg.load(scenario(tmp_path, "entities:\n  two: {type: Constant, params: {value: 3.0}}\n"
+                                   "set:\n  err.in0: [0.5, 0.5]\nplugs:\n  - ref.output -> err.in1\n"
+                                   "  - two.output -> k.gain\n"))
+    plugs = dict((b, a) for a, b in g.plugs())
+    assert plugs["err.in1"] == "ref.output" and plugs["k.gain"] == "two.output" and "err.in0" not in plugs
+    assert g["err.in0"].is_set and not g["k.gain"].is_set
+
+
+def test_set_names_parameters_too_and_the_nearest_file_wins(tmp_path):
+    write(tmp_path, "base.yaml", COMPOSED_BASE)
+    write(tmp_path, "middle.yaml", "extends: base.yaml\nset: {dev.q0: [1.0, 1.0], k.gain: 3.0}\n")
+    top = write(tmp_path, "top.yaml", "extends: middle.yaml\ndt: 0.02\nset: {dev.q0: [4.0, 5.0]}\n")
+    g = dg.load(top)
+    assert g.dt == 0.02 and np.array_equal(g["dev.q"].value, [4.0, 5.0]) and g["k.gain"].value == 3.0
+    assert g["dev"].given_params["size"] == 2  # the definition's other parameters stay
+    g = dg.load(top, overrides={"dev.q0": [7.0, 7.0], "k.gain": 9.0})  # the command line wins over every file
+    assert np.array_equal(g["dev.q"].value, [7.0, 7.0]) and g["k.gain"].value == 9.0
+
+
+def test_the_robot_is_the_model_of_every_entity_that_sets_none(tmp_path):
+    text = ("robot: talos\nentities:\n  robot: {type: RobotModel}\n  posture: {type: JointPosture}\n"
+            "  dev: {type: KinematicDevice, params: {size: 2, model: null}}\nplugs: [robot.state -> posture.robot]\n")
+    g = loads(text)
+    assert g["robot"].given_params["model"] == g["posture"].given_params["model"] == "talos"
+    assert g["dev"].params["model"] is None  # its own
+    saved = dumps(g)
+    assert saved.count("talos") == 1 and "robot: talos" in saved and "model: null" in saved
+    assert dumps(loads(saved)) == saved
+
+
+def test_a_saved_graph_names_its_robot_once_and_keeps_the_models_that_differ():
+    from dgraph.entities.robot import RobotModel
+
+    g = dg.Graph()
+    g.add(RobotModel("a", model="talos"), RobotModel("b", model="talos"))
+    g.add(dg.get_type("KinematicDevice")("dev", size=2))  # its default model (none) is not the robot
+    saved = dumps(g)
+    assert saved.count("talos") == 1 and "dev:\n    type: KinematicDevice\n    params: {size: 2, model: null}" in saved
+    again = loads(saved)
+    assert again["dev"].params["model"] is None and again["b"].given_params["model"] == "talos"
+
+
+def test_path_parameters_are_taken_from_the_file_that_wrote_them(tmp_path):
+    csv = "time, x\n0.0, 0.0\n1.0, 2.0\n"
+    write(tmp_path / "base", "data.csv", csv)
+    write(tmp_path, "other.csv", csv.replace("2.0", "4.0"))
+    write(tmp_path / "base", "traj.yaml", "entities:\n  traj: {type: TrajectoryFile, params: {path: data.csv,"
+                                          " interpolation: linear}}\n")
+    top = write(tmp_path, "top.yaml", "extends: base/traj.yaml\n")
+    assert dg.load(top)["traj"].position(1000)[0] == 2.0
+    data, _ = dg.files.parse(top.read_text(), str(top))
+    assert data["entities"]["traj"]["params"]["path"] == os.path.join("base", "data.csv")
+    top.write_text("extends: base/traj.yaml\nset: {traj.path: other.csv}\n")
+    assert dg.load(top)["traj"].position(1000)[0] == 4.0
+
+
+def test_parse_gives_the_composed_graph_as_one_file(tmp_path):
+    path = scenario(tmp_path, "name: s\nremove: {entities: [ref]}\nset: {dev.q0: [1.0, 1.0], err.in0: [0.0, 0.0]}\n")
+    data, _ = dg.files.parse(path.read_text(), str(path))
+    assert data["name"] == "s" and list(data["entities"]) == ["dev", "err", "k"]
+    assert data["entities"]["dev"]["params"] == {"size": 2, "q0": [1.0, 1.0]}
+    assert data["set"] == {"k.gain": 2.0, "err.in0": [0.0, 0.0]} and "ref.output -> err.in0" not in data["plugs"]
+    assert dumps(loads(yaml_dump(data))) == dumps(dg.load(path))
+
+
+def yaml_dump(data: dict) -> str:
+    import yaml
+
+    return yaml.safe_dump(data, sort_keys=False)
+
+
+def test_the_command_line_runs_a_composed_file(tmp_path, capsys):
+    from dgraph.cli import main
+
+    path = scenario(tmp_path, "duration: 0.05\nset: {k.gain: 4.0}\n")
+    assert main(["run", str(path), "--rerun", "off", "-q", "--set", "k.gain=5.0",
+                 "--npz", str(tmp_path / "run.npz")]) == 0
+    assert np.load(tmp_path / "run.npz")["k.output"].shape == (5, 2)
+
+
+COMPOSITION_ERRORS = [
+    # (scenario text after 'extends: base.yaml', the file to blame, line, message fragment)
+    ("entities:\n  x: {type: Gian}\n", "scenario", 3, "unknown entity type 'Gian'"),
+    ("plugs:\n  - dev.qq -> err.in1\n", "scenario", 3, "has no signal 'qq'"),
+    ("set:\n  k.gain: abc\n", "scenario", 3, "k.gain: expected a scalar float, got 'abc'"),
+    ("set:\n  k.size: 0\n", "scenario", 3, "parameter 'size' must be within"),
+    ("set:\n  nope.gain: 1.0\n", "scenario", 3, "no entity 'nope' in"),
+    ("remove:\n  entities: [kk]\n", "scenario", 3, "no entity 'kk' to remove in the files this one extends; did you"),
+    ("remove:\n  plugs: [dev.q -> err.in0]\n", "scenario", 3, "(err.in0 is plugged to ref.output)"),
+    ("remove:\n  plugs: [k.gain]\n", "scenario", 3, "no plug 'k.gain'"),
+    ("remove:\n  set: [k.input]\n", "scenario", 3, "k.input is not set by the files this one extends"),
+    ("remove:\n  record: [k.input]\n", "scenario", 3, "k.input is not recorded"),
+    ("remove:\n  entity: [k]\n", "scenario", 3, "unknown key 'entity' (allowed: entities, plugs, set, record)"),
+    ("record: [k.input, dev.q]\n", "scenario", 2, "dev.q is already recorded (BASE:14 [record.0])"),
+    ("record: [nope.output]\n", "scenario", 2, "recorded signal 'nope.output'"),
+    ("plugs:\n  - ref.output -> err.in1\n  - dev.v -> err.in1\n", "scenario", 4, "err.in1 is already plugged by this"),
+    ("set: {err.in1: [0.0, 0.0]}\nplugs:\n  - dev.v -> err.in1\n", "scenario", 4, "err.in1 is already set by this"),
+    ("set: {k.gain: 1.0}\noverrides: {k.gain: 2.0}\n", "scenario", 3, "k.gain is already set by this file"),
+    ("entities:\n  ref: {type: KinematicDevice, params: {size: 2}}\n", "scenario", 3,
+     "ref (KinematicDevice) has no signal 'output'"),
+    ("entities:\n  ref: {type: Constant, params: {value: [1.0, 2.0, 3.0]}}\n", "scenario", 3,
+     "(from BASE:8 [plugs.0])"),
+]
+
+
+@pytest.mark.parametrize(("text", "blamed", "line", "fragment"), COMPOSITION_ERRORS)
+def test_errors_of_a_composed_file_name_the_file_line_and_key_that_made_them(text, blamed, line, fragment, tmp_path):
+    path = scenario(tmp_path, text)
+    with pytest.raises(dg.GraphFileError) as info:
+        dg.load(path)
+    assert info.value.file == str(tmp_path / f"{blamed}.yaml")
+    assert info.value.line == line, str(info.value)
+    assert fragment.replace("BASE", str(tmp_path / "base.yaml")) in str(info.value)
+
+
+BASE_ERRORS = [
+    # (a mistake in the base, its line, message fragment): the scenario is right, the base is blamed
+    (COMPOSED_BASE.replace("dev.q -> err.in1", "dev.qq -> err.in1"), 9, "has no signal 'qq'"),
+    (COMPOSED_BASE.replace("k.gain: 2.0", "k.gain: two"), 13, "k.gain"),
+    (COMPOSED_BASE.replace("size: 2}}\n  ref", "size: 2, q0: [1]}}\n  ref"), 3, "dev"),
+    (COMPOSED_BASE.replace("record: [dev.q,", "record: [dev.qq,"), 14, "recorded signal 'dev.qq'"),
+    ("dt: 0.01\nremove: {entities: [k]}\nentities: {}\n", 2, "'remove' is for a file that extends another"),
+]
+
+
+@pytest.mark.parametrize(("base", "line", "fragment"), BASE_ERRORS)
+def test_a_mistake_of_the_base_names_the_base_when_a_scenario_is_loaded(base, line, fragment, tmp_path):
+    path = scenario(tmp_path, "entities:\n  extra: {type: Constant, params: {value: 1.0}}\n", base)
+    with pytest.raises(dg.GraphFileError) as info:
+        dg.load(path)
+    assert (info.value.file, info.value.line) == (str(tmp_path / "base.yaml"), line), str(info.value)
+    assert fragment in str(info.value)
+
+
+def test_a_bad_robot_is_blamed_on_the_file_that_names_it(tmp_path):
+    path = scenario(tmp_path, "name: x\nrobot: tals\n", "robot: talos\nentities:\n  device: {type: MujocoDevice}\n")
+    with pytest.raises(dg.GraphFileError, match=r"parameter 'model' must be one of \['talos'\]") as info:
+        dg.load(path)
+    assert (info.value.file, info.value.line, info.value.key) == (str(path), 3, "robot")
+
+
+def test_a_bad_command_line_setting_is_blamed_on_the_command_line(tmp_path):
+    path = scenario(tmp_path, "set: {k.gain: 3.0}\n")
+    for overrides, fragment in (({"k.gain": "abc"}, "expected a scalar float"), ({"nope.x": 1}, "no entity 'nope'"),
+                                ({"k.size": 0}, "must be within")):
+        with pytest.raises(dg.GraphFileError, match=fragment) as info:
+            dg.load(path, overrides)
+        assert (info.value.file, info.value.line) == ("<command line>", None)
+        assert info.value.key == f"--set {next(iter(overrides))}"
+
