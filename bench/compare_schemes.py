@@ -22,7 +22,6 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-import yaml
 from line_plot import line_plot  # bench/, the script's folder
 
 import dgraph as dg
@@ -39,6 +38,7 @@ from dgraph.evaluation import (
     tick_statistics,
     tracking_error,
 )
+from dgraph.files import declared_entities, parse, read_text
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -96,7 +96,7 @@ def run(name: str, scenario: str, out: Path) -> tuple[dict[str, np.ndarray], lis
     """Run one graph on ``scenario`` with the probes; its recording (the reference as
     ``reference`` and ``reference_acceleration``), control tick durations and wall time."""
     path = ROOT / "graphs" / f"{name}.yaml"
-    entities = yaml.safe_load(path.read_text())["entities"]
+    entities = declared_entities(parse(read_text(path), str(path))[0])  # with the files it extends
     overrides = {f"{e}.rerun": "off" for e in ("recorder", "view") if e in entities or e == "recorder"}
     graph = dg.load(str(path), overrides)
     if scenario == "transfer":

@@ -565,3 +565,98 @@ def test_a_bad_command_line_setting_is_blamed_on_the_command_line(tmp_path):
         assert (info.value.file, info.value.line) == ("<command line>", None)
         assert info.value.key == f"--set {next(iter(overrides))}"
 
+
+# -- the repository's graph files ---------------------------------------------------------------
+
+def shared_run(a: list[str], b: list[str]) -> int:
+    """The longest run of consecutive lines that ``a`` and ``b`` share."""
+    best, previous = 0, [0] * (len(b) + 1)
+    for x in a:
+        current = [0] * (len(b) + 1)
+        for j, y in enumerate(b, start=1):
+            if x == y:
+                current[j] = previous[j - 1] + 1
+                best = max(best, current[j])
+        previous = current
+    return best
+
+
+def code_lines(path: Path) -> list[str]:
+    """The file's lines without comments, blank lines and indentation."""
+    lines = (line.split(" #")[0].strip() for line in path.read_text().splitlines())
+    return [line for line in lines if line and not line.startswith("#")]
+
+
+def test_shared_run_counts_consecutive_identical_lines():
+    assert shared_run(list("abcdxyz"), list("qbcdxq")) == 4 and shared_run(list("ab"), list("cd")) == 0
+
+
+def test_no_two_graph_files_share_more_than_ten_consecutive_lines():
+    files = sorted(p for p in (ROOT / "graphs").rglob("*") if p.suffix in (".yaml", ".py"))
+    assert len(files) >= 8
+    for i, a in enumerate(files):
+        for b in files[i + 1:]:
+            run = shared_run(code_lines(a), code_lines(b))
+            assert run <= 10, f"{a.name} and {b.name} share {run} consecutive lines: compose them from a base"
+
+
+def chain(path: Path) -> list[dict]:
+    """The plain data of a file and of every file it extends."""
+    import yaml
+
+    out = [yaml.safe_load(path.read_text())]
+    while "extends" in out[-1]:
+        path = path.parent / out[-1]["extends"]
+        out.append(yaml.safe_load(path.read_text()))
+    return out
+
+
+@pytest.mark.parametrize("path", GRAPH_FILES, ids=lambda p: str(p.relative_to(ROOT / "graphs")))
+def test_every_graph_file_names_its_robot_once(path):
+    files = chain(path)
+    for data in files:
+        assert not any("model" in (spec.get("params") or {}) for spec in data.get("entities", {}).values())
+        assert not any(key.endswith(".model") for key in {**data.get("set", {}), **data.get("overrides", {})})
+    robots = [data["robot"] for data in files if "robot" in data]
+    models = {e.given_params["model"] for e in dg.load(path) if isinstance(e.given_params.get("model"), str)}
+    assert len(robots) == len(models) <= 1 and set(robots) == models
+
+
+SELF_CONTAINED = "3af9cc3"
+"""The last commit whose graph files each described a whole graph (before composition)."""
+
+
+def graph_summary(graph: dg.Graph, folder: Path) -> dict:
+    """What makes a graph: each entity's type and parameters (paths from ``folder``), the plugs,
+    the constants and the recorded signals, orders aside."""
+    from dgraph.files import to_plain
+
+    def value(entity, key, v):
+        if type(entity)._param_decls[key].kind == "path":
+            return os.path.relpath(v, folder)
+        return sorted(v) if (entity.type_name, key) == ("Recorder", "signals") else to_plain(v, key)
+
+    return {"entities": {e.name: (e.type_name, {k: value(e, k, v) for k, v in e.params.items()}) for e in graph},
+            "plugs": set(graph.plugs()),
+            "set": {i.full_name: to_plain(i.value, "") for e in graph for i in e.inputs.values() if i.is_set}}
+
+
+@pytest.mark.parametrize("name", ["pd_double_integrator", "talos_standing", "talos_sway", "talos_push_tank",
+                                  "talos_push_no_tank", "talos_tsid_position", "talos_ik_position"])
+def test_the_composed_graphs_are_the_graphs_the_self_contained_files_described(name, tmp_path):
+    import shutil
+    import subprocess
+
+    try:
+        old = subprocess.run(["git", "show", f"{SELF_CONTAINED}:graphs/{name}.yaml"], cwd=ROOT, check=True,
+                             capture_output=True, text=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        pytest.skip(f"needs the git history ({SELF_CONTAINED})")
+    shutil.copytree(ROOT / "graphs" / "data", tmp_path / "data")
+    write(tmp_path, f"{name}.yaml", old)
+    if name == "talos_push_no_tank":  # it extended the tank graph of its time
+        write(tmp_path, "talos_push_tank.yaml", subprocess.run(
+            ["git", "show", f"{SELF_CONTAINED}:graphs/talos_push_tank.yaml"], cwd=ROOT, check=True,
+            capture_output=True, text=True).stdout)
+    before = graph_summary(dg.load(tmp_path / f"{name}.yaml"), tmp_path)
+    assert graph_summary(dg.load(ROOT / "graphs" / f"{name}.yaml"), ROOT / "graphs") == before
