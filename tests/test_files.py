@@ -660,3 +660,13 @@ def test_the_composed_graphs_are_the_graphs_the_self_contained_files_described(n
             capture_output=True, text=True).stdout)
     before = graph_summary(dg.load(tmp_path / f"{name}.yaml"), tmp_path)
     assert graph_summary(dg.load(ROOT / "graphs" / f"{name}.yaml"), ROOT / "graphs") == before
+
+
+def test_the_readme_shows_the_sway_scenario_as_shipped():
+    import re
+
+    import yaml
+
+    blocks = re.findall(r"```yaml\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+    scenario = next(block for block in blocks if "extends:" in block)
+    assert yaml.safe_load(scenario) == yaml.safe_load((ROOT / "graphs" / "talos_sway.yaml").read_text())
