@@ -233,9 +233,11 @@ class Output(Signal):
         """A read at a tick earlier than the clock's latest: the stale outputs it needs (searched,
         :meth:`_stale_upstream`) and itself are computed at ``t`` unless one of them that is not
         time-varying is stamped later than ``t``: then it raises, naming that one, before
-        computing anything. Outputs read on demand or on another clock check themselves. With
-        the cache off every read recomputes (a debugging aid): nothing tells what changed, so
-        nothing is checked."""
+        computing anything. A time-varying output stamped later is evaluated at ``t`` when it
+        is read and handed out without being cached (:meth:`_compute_uncached`): its stamp
+        stays. Outputs read on demand or on another clock check themselves. With the cache off
+        every read recomputes (a debugging aid): nothing tells what changed, so nothing is
+        checked."""
         if not self._clock.cache_enabled:
             return self._compute(t)
         needed = self._stale_upstream(t)
@@ -243,10 +245,20 @@ class Output(Signal):
             stamp = node._time
             if stamp is not None and t < stamp and not node.time_varying:
                 raise _past_tick_error(node, t, stamp)
-        for node in needed:
-            if node._stale:  # an on-demand read in an earlier method may have computed it
+        for node in needed:  # stamped at or before t (or never): computing at t moves no stamp back
+            if node._stale and not _stamped_after(node, t):  # an earlier on-demand read may have computed it
                 node._compute(t)
-        return self._compute(t)
+        return self._compute_uncached(t) if _stamped_after(self, t) else self._compute(t)
+
+    def _compute_uncached(self, t: int) -> Any:
+        """The value at ``t`` of a time-varying output stamped later: computed and returned, with
+        the cached value and its stamp left as they were (and the output stale, as the clock's
+        move back to ``t`` made it)."""
+        value, stamp = self._value, self._time
+        try:
+            return self._compute(t)
+        finally:
+            self._value, self._time, self._stale = value, stamp, True
 
     def _cached_order(self) -> list[Output] | None:
         """Every output this one reads ahead of its method, directly or not, each after what it
@@ -423,6 +435,11 @@ class Output(Signal):
     def plugged_inputs(self) -> list[Input]:
         """The inputs this output feeds."""
         return list(self._plugged)
+
+
+def _stamped_after(output: Output, t: int) -> bool:
+    """True if ``output`` holds a value stamped later than tick ``t``."""
+    return output._time is not None and output._time > t
 
 
 def _past_tick_error(output: Output, t: int, stamp: int) -> DGraphError:

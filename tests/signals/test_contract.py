@@ -181,11 +181,14 @@ def test_a_past_read_of_a_fresh_output_is_served_from_its_cache(graph):
 
 
 def test_a_time_varying_output_is_evaluated_at_an_earlier_tick_but_not_what_reads_it(graph):
-    """A function of the tick is sampled anywhere; an output computed from it keeps its stamp."""
+    """A function of the tick is sampled anywhere, without moving its stamp back; an output
+    computed from it keeps its stamp."""
     c, d = graph.add(Clocked("c"), Scale("d"))
     graph.plug("c.now", "d.u")
     assert d.y(5) == 10.0
-    assert c.now(3) == 3.0 and c.now.time == 3
+    assert c.now(3) == 3.0 and (c.now.time, c.now.value) == (5, 5.0)
+    assert c.now(5) == 5.0 and c.now.time == 5
+    assert c.now(7) == 7.0 and c.now.time == 7
     with pytest.raises(dg.DGraphError, match=r"d\.y was read at tick 3, but it is stamped 5"):
         d.y(3)
     assert (d.y.time, d.y.value) == (5, 10.0)
