@@ -46,9 +46,9 @@ import numpy as np  # noqa: E402
 import pinocchio as pin  # noqa: E402
 
 import dgraph as dg  # noqa: E402
+from dgraph.control import SOLVED  # noqa: E402
+from dgraph.control.inverse_dynamics import InverseDynamicsQP  # noqa: E402
 from dgraph.entities.robot import load_model  # noqa: E402
-from dgraph.entities.solvers import InverseDynamicsQP  # noqa: E402
-from dgraph.entities.solvers.inverse_dynamics_qp import SOLVED  # noqa: E402
 
 MODES = ("corners", "wrench")
 

@@ -58,14 +58,10 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "graphs"))
 
-from dgraph.entities.contacts.constraint import ContactConstraint  # noqa: E402
-from dgraph.entities.solvers.inverse_dynamics_qp import (  # noqa: E402
-    DEFAULT_EPS_ABS,
-    INFINITY,
-    PROXIMAL_RHO,
-    InverseDynamicsQP,
-)
-from dgraph.entities.tasks.equation import TaskEquation  # noqa: E402
+from dgraph.control.contact import ContactConstraint  # noqa: E402
+from dgraph.control.equation import TaskEquation  # noqa: E402
+from dgraph.control.inverse_dynamics import DEFAULT_EPS_ABS, PROXIMAL_RHO, InverseDynamicsQP  # noqa: E402
+from dgraph.control.proxqp import INFINITY  # noqa: E402
 
 EPS_ABS = DEFAULT_EPS_ABS
 MAX_ITERATIONS = 1000
@@ -140,10 +136,10 @@ class Eliminated:
 
     name = "eliminated (library)"
 
-    def __init__(self, nv: int, nu: int, effort_limit: np.ndarray, acceleration_weight: float):
-        self.lib = InverseDynamicsQP(nv, nu, effort_limit, eps_abs=EPS_ABS, max_iterations=MAX_ITERATIONS,
+    def __init__(self, nv: int, n_unactuated: int, effort_limit: np.ndarray, acceleration_weight: float):
+        self.lib = InverseDynamicsQP(nv, n_unactuated, effort_limit, eps_abs=EPS_ABS, max_iterations=MAX_ITERATIONS,
                                      acceleration_weight=acceleration_weight)
-        self.nv, self.nu, self.na = nv, nu, nv - nu
+        self.nv, self.n_unactuated, self.n_actuated = nv, n_unactuated, nv - n_unactuated
         self.ws = None
 
     def sizes(self) -> tuple[int, int, int]:
@@ -158,7 +154,7 @@ class Eliminated:
 
     def recover(self, p: Problem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         x = self.qp.qp.results.x.copy()
-        tau = self.ws.torque_rows @ x + p.bias_forces[self.nu:]
+        tau = self.ws.torque_rows @ x + p.bias_forces[self.n_unactuated:]
         return x[:self.nv], x[self.nv:], tau
 
     def result(self) -> tuple[str, int]:
@@ -174,9 +170,9 @@ class Explicit:
     overwrites only the blocks that change.
     """
 
-    def __init__(self, nv: int, nu: int, effort_limit: np.ndarray, acceleration_weight: float, tau_weight: float,
-                 box: bool):
-        self.nv, self.nu, self.na = nv, nu, nv - nu
+    def __init__(self, nv: int, n_unactuated: int, effort_limit: np.ndarray, acceleration_weight: float,
+                 tau_weight: float, box: bool):
+        self.nv, self.n_unactuated, self.n_actuated = nv, n_unactuated, nv - n_unactuated
         self.effort_limit = np.asarray(effort_limit, dtype=float)
         self.acceleration_weight, self.tau_weight, self.box = acceleration_weight, tau_weight, box
         self.name = "explicit tau, box bounds" if box else "explicit tau, general rows"
@@ -187,7 +183,7 @@ class Explicit:
         return self.n, self.A.shape[0], self.C.shape[0]
 
     def _allocate(self, contacts: list[ContactConstraint]) -> None:
-        nv, na = self.nv, self.na
+        nv, na = self.nv, self.n_actuated
         self.nf = sum(c.n_forces for c in contacts)
         n = self.n = nv + self.nf + na
         n_eq = nv + 6 * len(contacts)
@@ -197,7 +193,7 @@ class Explicit:
         self.A, self.b = np.zeros((n_eq, n)), np.zeros(n_eq)
         self.C, self.lower, self.upper = np.zeros((n_in, n)), np.zeros(n_in), np.zeros(n_in)
         tau = slice(nv + self.nf, n)
-        self.A[self.nu:nv, tau] = -np.eye(na)  # - S^T tau (S selects the actuated rows)
+        self.A[self.n_unactuated:nv, tau] = -np.eye(na)  # - S^T tau (S selects the actuated rows)
         self.H[tau, tau] = 2.0 * self.tau_weight * np.eye(na)
         if self.box:
             self.l_box, self.u_box = np.full(n, -INFINITY), np.full(n, INFINITY)
@@ -321,14 +317,14 @@ def summarise(runs: dict[str, dict], variants: list, reference: str) -> list[dic
     return rows
 
 
-def exact_reference(problems: list[Problem], nv: int, nu: int, effort_limit: np.ndarray,
+def exact_reference(problems: list[Problem], nv: int, n_unactuated: int, effort_limit: np.ndarray,
                     acceleration_weight: float) -> dict[str, list[np.ndarray]] | None:
     """daqp's exact solution of every problem (eliminated form, assembled by the library)."""
     try:
         import daqp
     except ImportError:
         return None
-    lib = InverseDynamicsQP(nv, nu, effort_limit, acceleration_weight=acceleration_weight)
+    lib = InverseDynamicsQP(nv, n_unactuated, effort_limit, acceleration_weight=acceleration_weight)
     exact = {"a": [], "f": [], "tau": [], "failures": 0}
     for p in problems:
         ws = lib.assemble(p.mass_matrix, p.bias_forces, p.tasks, p.contacts)
@@ -340,7 +336,7 @@ def exact_reference(problems: list[Problem], nv: int, nu: int, effort_limit: np.
         exact["failures"] += int(exitflag != 1)
         exact["a"].append(x[:nv])
         exact["f"].append(x[nv:])
-        exact["tau"].append(ws.torque_rows @ x + p.bias_forces[nu:])
+        exact["tau"].append(ws.torque_rows @ x + p.bias_forces[n_unactuated:])
     return exact
 
 
@@ -393,11 +389,12 @@ def main() -> None:
     start = time.perf_counter()
     problems, info = record(args.ticks, args.warmup)
     record_s = time.perf_counter() - start
-    nv, nu = info["nv"], info["n_unactuated"]
+    nv, n_unactuated = info["nv"], info["n_unactuated"]
     contact_sets = sorted({tuple(c.name for c in p.contacts) for p in problems})
-    variants = [Eliminated(nv, nu, info["effort_limit"], info["acceleration_weight"]),
-                Explicit(nv, nu, info["effort_limit"], info["acceleration_weight"], args.tau_weight, box=False),
-                Explicit(nv, nu, info["effort_limit"], info["acceleration_weight"], args.tau_weight, box=True)]
+    limits, weight = info["effort_limit"], info["acceleration_weight"]
+    variants = [Eliminated(nv, n_unactuated, limits, weight),
+                Explicit(nv, n_unactuated, limits, weight, args.tau_weight, box=False),
+                Explicit(nv, n_unactuated, limits, weight, args.tau_weight, box=True)]
     start = time.perf_counter()
     runs = replay(problems, variants)
     replay_s = time.perf_counter() - start
@@ -406,7 +403,7 @@ def main() -> None:
     closed_loop_delta = max(float(np.abs(tau - p.closed_loop_tau).max())
                             for tau, p in zip(runs[reference]["tau"], problems, strict=True))
     closed_loop_failures = sum(p.closed_loop_status != 0 for p in problems)
-    exact = exact_reference(problems, nv, nu, info["effort_limit"], info["acceleration_weight"])
+    exact = exact_reference(problems, nv, n_unactuated, info["effort_limit"], info["acceleration_weight"])
     if exact is not None:
         for row, v in zip(rows, variants, strict=True):
             for key in ("a", "tau", "f"):

@@ -13,10 +13,11 @@ no first-tick set-up). BLAS and OpenMP run on one thread, as in bench/talos_tick
 Each sample goes to the category of its innermost *project* frame (a file under ``dgraph/`` or
 ``sim/``; numpy, Pinocchio or Rerun frames below it count for the project code that called them):
 
-- ``inverse_dynamics_qp.py``: **ProxQP (update + solve)** when that frame's source line calls
-  ``qp.init``, ``qp.update`` or ``qp.solve`` (the line is read from the profiled source, so line
-  numbers may move; if the file cannot be read, the function ``run`` counts as ProxQP), else
-  **QP assembly**; the rest of ``dgraph/entities/solvers/``: **solver entity**;
+- ``dgraph/control/`` (the maths layer: the QP's assembly and its ProxQP driver): **ProxQP
+  (update + solve)** when that frame's source line calls ``qp.init``, ``qp.update`` or
+  ``qp.solve`` (the line is read from the profiled source, so line numbers may move; if the file
+  cannot be read, the functions ``solve`` of ``proxqp.py`` and ``_run`` count as ProxQP), else
+  **QP assembly**; ``dgraph/entities/solvers/``: **solver entity**;
 - ``dgraph/signals/``: **signal framework**; ``dgraph/entities/{features,tasks,contacts,
   references}``: **features, tasks, contacts, references**; ``.../estimators``: **estimator**;
   ``.../robot``: **robot model** (the Pinocchio pass and its accessors); ``.../recording``:
@@ -112,9 +113,11 @@ def source_line(path: str, line: int) -> str | None:
 def categorise_frame(path: str, function: str, line: int) -> str:
     """The category of a sample whose innermost project frame is ``function`` at ``path:line``."""
     parts = path.split("/")
-    if path.endswith("solvers/inverse_dynamics_qp.py"):
+    if parts[:2] == ["dgraph", "control"]:
         text = source_line(path, line)
-        calls_proxqp = function.rsplit(".", 1)[-1] == "run" if text is None else bool(PROXQP_CALL.search(text))
+        name = function.rsplit(".", 1)[-1]
+        in_proxqp = name == "_run" or (name == "solve" and path.endswith("proxqp.py"))
+        calls_proxqp = in_proxqp if text is None else bool(PROXQP_CALL.search(text))
         return CATEGORIES[0] if calls_proxqp else CATEGORIES[1]
     if parts[0] == "sim":
         return "MuJoCo step" if MUJOCO_CALL.search(source_line(path, line) or "") else "device (Python)"

@@ -37,8 +37,8 @@ single_threaded()
 import numpy as np  # noqa: E402
 from id_formulations import exact_reference, record  # noqa: E402
 
-from dgraph.entities.solvers import InverseDynamicsQP  # noqa: E402
-from dgraph.entities.solvers.inverse_dynamics_qp import PROXIMAL_RHO, SOLVED  # noqa: E402
+from dgraph.control import SOLVED  # noqa: E402
+from dgraph.control.inverse_dynamics import PROXIMAL_RHO, InverseDynamicsQP  # noqa: E402
 
 PROXQP_DEFAULT_RHO = 1e-6
 

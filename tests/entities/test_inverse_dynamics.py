@@ -8,8 +8,8 @@ import pinocchio as pin
 import pytest
 
 import dgraph as dg
-from dgraph.entities.solvers import InverseDynamicsQP
-from dgraph.entities.solvers.inverse_dynamics_qp import NOT_FINITE, PRIMAL_INFEASIBLE, SOLVED
+from dgraph.control import NOT_FINITE, PRIMAL_INFEASIBLE, SOLVED
+from dgraph.control.inverse_dynamics import InverseDynamicsQP
 from tests.entities.talos_graph import build, half_sitting
 
 
@@ -34,7 +34,7 @@ def exact_solution(graph):
     exact to machine precision); and its workspace."""
     qp = graph["solver"]._qp
     ws = next(iter(qp._workspaces.values()))
-    qp.write_torque_bounds(ws, graph["robot"].state(0).bias_forces)  # written by the solver only when needed
+    ws.rows.write_torque_bounds(graph["robot"].state(0).bias_forces)  # written by the solver only when needed
     n_eq = len(ws.b)
     A = np.vstack([ws.A, ws.C])
     upper = np.r_[ws.b, ws.upper]

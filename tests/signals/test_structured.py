@@ -18,7 +18,7 @@ from dgraph.signals.value_types import VALUE_TYPES, value_type
 
 ENTITY_TYPES = entity_types()  # imports every family, which registers its value types
 
-PACKAGE_TYPES = ("RobotState", "FeatureValue", "TaskEquation", "ContactConstraint", "PriorityRows",
+PACKAGE_TYPES = ("RobotState", "FeatureValue", "TaskEquation", "ContactConstraint", "RowBlock",
                  "QPSolution", "Passivity", "CascadeSolution", "TankStage", "Estimate")
 
 

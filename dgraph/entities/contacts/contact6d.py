@@ -7,8 +7,8 @@ import numpy as np
 import pinocchio as pin
 
 import dgraph as dg
+from dgraph.control.contact import ContactConstraint
 from dgraph.entities.contacts.anchoring import AnchoredContact
-from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.contacts.wrench_cone import corner_force_metric, wrench_cone
 from dgraph.entities.robot.robot_state import LOCAL, FrameReader, RobotState
 from dgraph.entities.robot.rotations import MatrixRows, log3_product

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
+from dgraph.control.contact import ContactConstraint
 from dgraph.entities.contacts.anchoring import AnchoredContact
-from dgraph.entities.contacts.constraint import ContactConstraint
 from dgraph.entities.robot.robot_state import WORLD, FrameReader, RobotState
 from dgraph.entities.tasks.gains import Gains
 

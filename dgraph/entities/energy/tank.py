@@ -9,7 +9,10 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.contacts.constraint import ContactConstraint
+from dgraph.control.contact import ContactConstraint
+from dgraph.control.equation import TaskEquation
+from dgraph.control.passivity import Passivity
+from dgraph.control.solutions import QPSolution
 from dgraph.entities.energy.power import (
     TaskBlock,
     stack,
@@ -21,8 +24,6 @@ from dgraph.entities.energy.power import (
 from dgraph.entities.energy.valves import TankLimits, Valves, overflow_valve, valves
 from dgraph.entities.named_inputs import declare_named_inputs
 from dgraph.entities.robot.robot_state import RobotState, unactuated_dofs
-from dgraph.entities.solvers.inverse_dynamics_qp import Passivity, QPSolution
-from dgraph.entities.tasks.equation import TaskEquation
 from dgraph.signals.value_types import value_type
 
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.features.feature import Feature, FeatureValue, parse_mask
+from dgraph.control.feature import FeatureValue
+from dgraph.entities.features.feature import Feature, parse_mask
 from dgraph.entities.robot.robot_state import RobotState
 
 

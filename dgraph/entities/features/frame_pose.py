@@ -6,7 +6,8 @@ import numpy as np
 import pinocchio as pin
 
 import dgraph as dg
-from dgraph.entities.features.feature import Feature, FeatureValue, parse_mask
+from dgraph.control.feature import FeatureValue
+from dgraph.entities.features.feature import Feature, parse_mask
 from dgraph.entities.robot.robot_state import WORLD, FrameKinematics, FrameReader, RobotState
 from dgraph.entities.robot.rotations import log3_product
 

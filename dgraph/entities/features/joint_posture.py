@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.features.feature import Feature, FeatureValue
+from dgraph.control.feature import FeatureValue
+from dgraph.entities.features.feature import Feature
 from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
 from dgraph.entities.selection import contiguous
 

@@ -5,22 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.hierarchy.cascade import CascadeSolution, Level, LexicographicCascade
-from dgraph.entities.hierarchy.rows import PriorityRows
+from dgraph.control.cascade import LexicographicCascade
+from dgraph.control.rows import RowBlock, stacked
+from dgraph.control.solutions import CascadeSolution
 from dgraph.entities.hierarchy.stack import StackCommands
 from dgraph.entities.named_inputs import declare_named_inputs
 from dgraph.entities.robot.robot_state import load_model
-
-
-def stacked_level(key: object, rows: list[PriorityRows]) -> Level:
-    """One :class:`Level` from the rows of its active tasks."""
-    if len(rows) == 1:
-        r = rows[0]
-        return Level(key, r.equality_matrix, r.equality_vector, r.inequality_matrix, r.lower, r.upper)
-    return Level(key, np.vstack([r.equality_matrix for r in rows]),
-                 np.concatenate([r.equality_vector for r in rows]),
-                 np.vstack([r.inequality_matrix for r in rows]),
-                 np.concatenate([r.lower for r in rows]), np.concatenate([r.upper for r in rows]))
 
 
 @dg.register
@@ -29,17 +19,17 @@ class HierarchicalSolver(StackCommands, dg.Entity):
     Saab et al., Eq. 2.59).
 
     Every tick, the levels of ``stack`` (highest first) are solved lexicographically over the
-    velocity ``v`` (nv) by :class:`~dgraph.entities.hierarchy.cascade.LexicographicCascade`:
+    velocity ``v`` (nv) by :class:`~dgraph.control.cascade.LexicographicCascade`:
     level ``k`` minimises ``||A_k v - b_k||^2 + ||s_k||^2`` (equalities and the slack ``s_k`` of
     its inequalities ``l_k <= C_k v - s_k <= u_k``) while every level above keeps its optimal
     residual and slack; a lower level never degrades a higher one. A last, implicit level
     ``min ||v||^2`` makes ``v`` unique. The rows of a level are those of its active tasks
-    (:class:`PriorityRows` from :class:`VelocityTask`, :class:`VelocityContact`,
+    (:class:`~dgraph.control.rows.RowBlock` from :class:`VelocityTask`, :class:`VelocityContact`,
     :class:`JointLimits`); Table 4.1's stack is contacts and limits at 0, then CoM height, CoM
     lateral-sagittal, waist orientation, posture.
 
-    Failures never raise: non-finite rows or a failed ProxQP level give ``status`` (the codes
-    of the inverse-dynamics solver: 0 solved, 1 max iterations, 2 primal infeasible, 3 dual
+    Failures never raise: non-finite rows or a failed ProxQP level give ``status`` (a
+    :class:`~dgraph.control.status.Status`: 0 solved, 1 max iterations, 2 primal infeasible, 3 dual
     infeasible, 4 not finite, 5 other). After a failed level ``velocity`` is the solution of the
     levels above it, which all still hold (limits and contacts first); with non-finite rows it
     is 0 (the robot stops). The next tick starts cold.
@@ -51,7 +41,8 @@ class HierarchicalSolver(StackCommands, dg.Entity):
     Inputs: one per task (a ``rows`` output), ``stack`` (the levels; edited by the commands
     ``push(task, level=None)``, ``remove(task)``, ``up(task)``, ``down(task)``, ``clear()``;
     ``levels()`` lists them).
-    Outputs: ``solution`` (:class:`CascadeSolution`), ``velocity`` (nv, the command of a
+    Outputs: ``solution`` (:class:`~dgraph.control.solutions.CascadeSolution`; its ``levels``
+    are those of the stack, then the minimum norm), ``velocity`` (nv, the command of a
     velocity-controlled device or an integrator), ``level_residuals`` (one per level of the
     stack, 0 while a level has no active task, then the final ``||v||``), ``status``,
     ``iterations``, ``qp_levels`` (levels that needed ProxQP), ``solve_time`` (s).
@@ -68,18 +59,18 @@ class HierarchicalSolver(StackCommands, dg.Entity):
     def configure(self) -> None:
         """Size ``v``, declare the task inputs and the stack."""
         self.nv = load_model(self.model, self.name).nv
-        declare_named_inputs(self, [(self.tasks, PriorityRows, "rows of task")], reserved=("stack",))
+        declare_named_inputs(self, [(self.tasks, RowBlock, "rows of task")], reserved=("stack",))
         self.declare_stack(self.priorities)
         self._cascade = LexicographicCascade(eps_abs=self.eps_abs, max_iterations=self.max_iterations,
                                              rank_tolerance=self.rank_tolerance, closed_form=self.closed_form)
-        self._minimum_norm = Level("minimum_norm", np.eye(self.nv), np.zeros(self.nv), np.zeros((0, self.nv)),
-                                   np.zeros(0), np.zeros(0))
+        self._minimum_norm = RowBlock.equalities(np.eye(self.nv), np.zeros(self.nv), key="minimum_norm")
+        self._no_rows = RowBlock.empty(self.nv, key=())  # a level whose tasks are all inactive
 
     def setup(self) -> None:
         """Index the task inputs."""
         self._inputs = {name: getattr(self, name) for name in self.tasks}
 
-    def _rows(self, name: str, t: int) -> PriorityRows:
+    def _rows(self, name: str, t: int) -> RowBlock:
         """The task's rows, checked (``SpecError`` naming the input)."""
         rows = self._inputs[name](t)
         problem = rows.shape_problem(self.nv)
@@ -88,23 +79,24 @@ class HierarchicalSolver(StackCommands, dg.Entity):
                                entity=self.name, signal=name)
         return rows
 
-    def _levels(self, t: int) -> tuple[list[Level], list[int]]:
-        """The levels with active rows (then the minimum-norm level) and their places in the stack."""
-        levels, places = [], []
-        stack = self.read_stack(t)
-        for place, level in enumerate(stack):
+    def _levels(self, t: int) -> list[RowBlock]:
+        """One level per level of the stack, highest first (the rows of its active tasks, none
+        while they are all inactive, so that an index always names the same level), then the
+        minimum-norm level."""
+        levels = []
+        for level in self.read_stack(t):
             active = [(name, rows) for name in level if (rows := self._rows(name, t)).active]
             if active:
                 key = tuple((name, len(r.equality_vector), len(r.lower)) for name, r in active)
-                levels.append(stacked_level(key, [r for _, r in active]))
-                places.append(place)
-        return [*levels, self._minimum_norm], [*places, len(stack)]
+                levels.append(stacked([r for _, r in active], key))
+            else:
+                levels.append(self._no_rows)
+        return [*levels, self._minimum_norm]
 
     @dg.output(dtype=CascadeSolution, on_demand=True)  # reads only the tasks in the stack
     def solution(self, t: int) -> CascadeSolution:
-        """The cascade's answer at ``t``."""
-        levels, self._places = self._levels(t)
-        return self._cascade.solve(levels, self.nv, t)
+        """The cascade's answer at ``t`` (its ``levels``: those of the stack, then the minimum norm)."""
+        return self._cascade.solve(self._levels(t), self.nv, t)
 
     @dg.output(shape=("nv",), depends=("solution",))
     def velocity(self, t: int) -> np.ndarray:
@@ -115,10 +107,7 @@ class HierarchicalSolver(StackCommands, dg.Entity):
     def level_residuals(self, t: int) -> np.ndarray:
         """``sqrt(||A_k v - b_k||^2 + ||s_k||^2)`` per level of the stack (0 for a level whose
         tasks are all inactive: it has no rows; an index always names the same level), then ``||v||``."""
-        solution = self.solution(t)
-        residuals = np.zeros(self._places[-1] + 1)
-        residuals[self._places] = solution.residuals
-        return residuals
+        return self.solution(t).residuals
 
     @dg.output(shape=(), dtype="int", depends=("solution",))
     def status(self, t: int) -> int:

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
+from dgraph.control.rows import RowBlock, selection
 from dgraph.entities.activation import Activatable
-from dgraph.entities.hierarchy.rows import PriorityRows
 from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
 
 
@@ -29,7 +29,7 @@ class JointLimits(Activatable, dg.Entity):
     the graph's), ``velocity_scale`` (fraction of ``v_max`` allowed).
     Inputs: ``robot`` (RobotModel state, for ``q``), ``active`` (bool; commands ``activate`` /
     ``deactivate``).
-    Outputs: ``rows`` (:class:`PriorityRows`, inequalities over ``v``).
+    Outputs: ``rows`` (:class:`RowBlock`, inequalities over ``v``).
     """
 
     model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the rows)")
@@ -48,8 +48,7 @@ class JointLimits(Activatable, dg.Entity):
         self._q_min = model.lowerPositionLimit[self._q_index].copy()
         self._q_max = model.upperPositionLimit[self._q_index].copy()
         self._v_max = self.velocity_scale * model.velocityLimit[v_index]
-        self._selection = np.zeros((len(joints), model.nv))
-        self._selection[np.arange(len(joints)), v_index] = 1.0
+        self._selection = selection(v_index, model.nv)
 
     def check(self) -> list[str]:
         """The plugged robot model must be the size of ``model``."""
@@ -58,11 +57,11 @@ class JointLimits(Activatable, dg.Entity):
             return [f"its model has nv = {self.nv} but the plugged robot has nv = {model.nv}"]
         return []
 
-    @dg.output(dtype=PriorityRows, depends=("robot", "active"))
-    def rows(self, t: int) -> PriorityRows:
+    @dg.output(dtype=RowBlock, depends=("robot", "active"))
+    def rows(self, t: int) -> RowBlock:
         """``l <= S v <= u`` (see the class docstring)."""
         q = self.robot(t).q[self._q_index]
         with np.errstate(invalid="ignore"):  # inf - inf cannot happen: limits are finite or one-sided
             lower = np.clip((self._q_min - q) / self.dt, -self._v_max, self._v_max)
             upper = np.clip((self._q_max - q) / self.dt, -self._v_max, self._v_max)
-        return PriorityRows.inequalities(self._selection, lower, upper, bool(self.active(t)))
+        return RowBlock.inequalities(self._selection, lower, upper, bool(self.active(t)))

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import dgraph as dg
+from dgraph.control.rows import RowBlock
 from dgraph.entities.contacts.contact6d import Contact6d
-from dgraph.entities.hierarchy.rows import PriorityRows
 
 
 @dg.register
@@ -20,12 +20,12 @@ class VelocityContact(Contact6d):
     is the gain ``lambda`` (1/s; 0: ``J_c v = 0``, the thesis's form) and ``kd`` is not used; the
     ``contact`` output remains that of a Contact6d with these gains.
 
-    Output (besides Contact6d's): ``rows`` (:class:`PriorityRows`, 6 equalities over ``v``).
+    Output (besides Contact6d's): ``rows`` (:class:`RowBlock`, 6 equalities over ``v``).
     """
 
-    @dg.output(dtype=PriorityRows, depends=("contact",))
-    def rows(self, t: int) -> PriorityRows:
+    @dg.output(dtype=RowBlock, depends=("contact",))
+    def rows(self, t: int) -> RowBlock:
         """``J_c v = -kp e`` (no row while inactive)."""
         contact = self.contact(t)
         gain = self._gains.vector("kp", 6, t)
-        return PriorityRows.equalities(contact.jacobian, -gain * contact.error, contact.active)
+        return RowBlock.equalities(contact.jacobian, -gain * contact.error, contact.active)

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
+from dgraph.control.feature import FeatureValue
+from dgraph.control.rows import RowBlock
 from dgraph.entities.activation import Activatable
-from dgraph.entities.features.feature import FeatureValue
 from dgraph.entities.hierarchy.adaptive_gain import adaptive_gain
-from dgraph.entities.hierarchy.rows import PriorityRows
 from dgraph.entities.robot.robot_state import RobotState
 from dgraph.entities.tasks.gains import Gains
 
@@ -34,7 +34,7 @@ class VelocityTask(Activatable, dg.Entity):
     read, for ``J v``), ``gain`` or the three adaptive-gain
     inputs, ``active`` (bool; commands ``activate`` / ``deactivate``; an inactive task adds
     no row to its level).
-    Outputs: ``rows`` (:class:`PriorityRows`, plugged into a hierarchical solver),
+    Outputs: ``rows`` (:class:`RowBlock`, plugged into a hierarchical solver),
     ``desired_velocity`` (``x_dot* - lambda e``), ``gain_value`` (``lambda``, per row).
     """
 
@@ -76,7 +76,7 @@ class VelocityTask(Activatable, dg.Entity):
         reference_velocity = f.jacobian @ self.robot(t).v - f.error_velocity
         return reference_velocity - self.gain_value(t) * f.error
 
-    @dg.output(dtype=PriorityRows, depends=("feature", "desired_velocity", "active"))
-    def rows(self, t: int) -> PriorityRows:
+    @dg.output(dtype=RowBlock, depends=("feature", "desired_velocity", "active"))
+    def rows(self, t: int) -> RowBlock:
         """``J v = x_dot* - lambda e`` (no row while inactive)."""
-        return PriorityRows.equalities(self._feature(t).jacobian, self.desired_velocity(t), bool(self.active(t)))
+        return RowBlock.equalities(self._feature(t).jacobian, self.desired_velocity(t), bool(self.active(t)))

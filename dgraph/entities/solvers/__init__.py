@@ -1,6 +1,6 @@
-"""Solvers: whole-body QP controllers."""
+"""Solvers: whole-body torque controllers (the maths they run is in :mod:`dgraph.control`)."""
 
 from dgraph.entities.solvers.inverse_dynamics import InverseDynamicsSolver
-from dgraph.entities.solvers.inverse_dynamics_qp import STATUS_NAMES, InverseDynamicsQP, QPSolution
+from dgraph.entities.solvers.torque_solver import TorqueSolver
 
-__all__ = ["STATUS_NAMES", "InverseDynamicsQP", "InverseDynamicsSolver", "QPSolution"]
+__all__ = ["InverseDynamicsSolver", "TorqueSolver"]

@@ -1,7 +1,6 @@
-"""Tasks: weighted acceleration-level task equations built from features."""
+"""Tasks: weighted acceleration-level tasks built from features, and the force task."""
 
-from dgraph.entities.tasks.equation import TaskEquation
 from dgraph.entities.tasks.force_task import ForceTask
 from dgraph.entities.tasks.task import Task
 
-__all__ = ["ForceTask", "Task", "TaskEquation"]
+__all__ = ["ForceTask", "Task"]

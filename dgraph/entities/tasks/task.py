@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.features.feature import FeatureValue
-from dgraph.entities.tasks.equation import TaskEquation
+from dgraph.control.equation import TaskEquation
+from dgraph.control.feature import FeatureValue
 from dgraph.entities.tasks.gains import Gains
 
 

@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 
 import dgraph as dg
+from dgraph.control import Passivity
+from dgraph.control.proxqp import INFINITY
 from dgraph.entities.energy import EnergyTank
 from dgraph.entities.energy.power import stiffness, task_power, task_space_inertia
 from dgraph.entities.features import JointPosture
 from dgraph.entities.robot import RobotModel, load_model
 from dgraph.entities.solvers import InverseDynamicsSolver
-from dgraph.entities.solvers.inverse_dynamics_qp import INFINITY, Passivity
 from dgraph.entities.tasks import Task
 from tests.entities.talos_graph import CONTACTS, TASKS, build, half_sitting
 
@@ -109,7 +110,7 @@ def test_zero_scale_zeroes_every_task_vector_and_force_reference():
     contacts = [g[name].contact(0) for name in CONTACTS]
     qp = g["solver"]._qp
     ws = qp.assemble(state.mass_matrix, state.bias_forces, tasks, contacts, Passivity(1.0, -0.3, state.v))
-    assert ws.upper[-qp.na - 1] == INFINITY and np.abs(ws.g).max() > 1e-3
+    assert ws.upper[-qp.n_actuated - 1] == INFINITY and np.abs(ws.g).max() > 1e-3
     ws = qp.assemble(state.mass_matrix, state.bias_forces, tasks, contacts, Passivity(0.0, None, state.v))
     assert not ws.g.any()
     # a contact with a force reference (a force task): its reference is scaled too

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import dgraph as dg
+from dgraph.control import NOT_FINITE, SOLVED
 from dgraph.entities.hierarchy import HierarchicalInverseDynamics
-from dgraph.entities.solvers.inverse_dynamics_qp import NOT_FINITE, SOLVED
 from tests.entities.talos_graph import CONTACTS, TASKS, build
 from tests.entities.test_inverse_dynamics import perturbed_state
 
@@ -64,6 +64,10 @@ def test_a_non_finite_task_gives_the_fallback_torque_and_a_status():
     np.testing.assert_allclose(solver.tau(0), solver.fallback_torque(g["robot"].state(0)))
 
 
-def test_the_passive_mode_is_refused_rather_than_ignored():
-    with pytest.raises(dg.ParamError, match="no passive mode"):
+def test_there_is_no_passive_mode_to_ignore():
+    """No passivity row: no ``passive`` parameter (asking for one is refused, naming it), no
+    ``passivity`` input and none of the weighted solver's passivity outputs."""
+    with pytest.raises(dg.ParamError, match=r"unknown parameter\(s\) passive"):
         HierarchicalInverseDynamics("hid", passive=True)
+    solver = HierarchicalInverseDynamics("hid")
+    assert not any(hasattr(solver, name) for name in ("passivity", "passivity_relaxed", "torque_limited"))

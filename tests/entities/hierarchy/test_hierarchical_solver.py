@@ -8,8 +8,7 @@ import pytest
 from talos_ik import HAND_FRAME, build, half_sitting
 
 import dgraph as dg
-from dgraph.entities.hierarchy import PriorityRows
-from dgraph.entities.solvers.inverse_dynamics_qp import NOT_FINITE, SOLVED
+from dgraph.control import NOT_FINITE, SOLVED, RowBlock
 
 
 def frame_position(graph, frame, t):
@@ -50,7 +49,7 @@ def test_lower_levels_do_not_degrade_higher_ones_on_talos():
 
 def test_a_misshaped_task_is_reported_with_the_solver_and_input_names():
     g = build()
-    g["solver"].waist.set(PriorityRows.equalities(np.zeros((2, 10)), np.zeros(2)))  # 10 columns, not 38
+    g["solver"].waist.set(RowBlock.equalities(np.zeros((2, 10)), np.zeros(2)))  # 10 columns, not 38
     with pytest.raises(dg.SpecError, match=r"solver\.waist at tick 0: .*nv = 38") as info:
         g["solver"].velocity(0)
     assert (info.value.entity, info.value.signal) == ("solver", "waist")

@@ -7,8 +7,9 @@ import pinocchio as pin
 import pytest
 
 import dgraph as dg
+from dgraph.control import RowBlock
 from dgraph.entities.devices import KinematicDevice
-from dgraph.entities.hierarchy import HierarchicalSolver, PriorityRows
+from dgraph.entities.hierarchy import HierarchicalSolver
 from dgraph.entities.hierarchy.stack import initial_stack, moved, pushed
 
 
@@ -19,11 +20,11 @@ class FixedRows(dg.Entity):
     target = dg.Param(0.0, kind="float")
     active = dg.Input(shape=(), dtype="bool", default=True)
 
-    @dg.output(dtype=PriorityRows)
+    @dg.output(dtype=RowBlock)
     def rows(self, t):
         matrix = np.zeros((1, 6))
         matrix[0, self.index] = 1.0
-        return PriorityRows.equalities(matrix, np.array([self.target]), bool(self.active(t)))
+        return RowBlock.equalities(matrix, np.array([self.target]), bool(self.active(t)))
 
 
 def test_initial_stack_groups_equal_priorities_and_closes_gaps():

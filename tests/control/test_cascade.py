@@ -8,8 +8,13 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from dgraph.entities.hierarchy.cascade import Level, LexicographicCascade
-from dgraph.entities.solvers.inverse_dynamics_qp import NOT_FINITE, SOLVED
+from dgraph.control import NOT_FINITE, SOLVED, RowBlock
+from dgraph.control.cascade import LexicographicCascade
+
+
+def keyed(key, A, b, C, lower, upper):
+    """A level named ``key`` (the cascade keeps a ProxQP workspace per key)."""
+    return RowBlock(A, b, C, lower, upper, key=key)
 
 
 def random_level(rng, key, n, m_e, m_i, *, dependent=False, conflicting=False, around_zero=False):
@@ -31,7 +36,7 @@ def random_level(rng, key, n, m_e, m_i, *, dependent=False, conflicting=False, a
         C = np.vstack([C, row, -row])
         lower = np.r_[lower, 1.0, 1.0]  # row x >= 1 and row x <= -1
         upper = np.r_[upper, np.inf, np.inf]
-    return Level(key, A, b, C, lower, upper)
+    return keyed(key, A, b, C, lower, upper)
 
 
 @st.composite
@@ -189,9 +194,9 @@ def test_feasible_top_inequalities_hold_whatever_the_levels_below_ask(problem):
     levels, n = problem
     rng = np.random.default_rng(n + len(levels))
     inequalities = random_level(rng, 0, n, 0, 3, around_zero=True)
-    top = Level("top", np.zeros((0, n)), np.zeros(0), inequalities.inequality_matrix, inequalities.lower,
+    top = keyed("top", np.zeros((0, n)), np.zeros(0), inequalities.inequality_matrix, inequalities.lower,
                 inequalities.upper)  # inequalities only, and x = 0 satisfies them: feasible
-    pulling = Level("pull", np.eye(n), 1e3 * np.ones(n), np.zeros((0, n)), np.zeros(0), np.zeros(0))
+    pulling = keyed("pull", np.eye(n), 1e3 * np.ones(n), np.zeros((0, n)), np.zeros(0), np.zeros(0))
     solution = LexicographicCascade().solve([top, *levels, pulling], n)
     assert solution.status == SOLVED
     values = top.inequality_matrix @ solution.x
@@ -223,9 +228,9 @@ def test_equality_stacks_match_null_space_projection(n_levels, rows, seed):
 
 def test_a_level_infeasible_on_its_own_gets_its_least_violation_and_the_rest_goes_on():
     n = 3
-    top = Level(0, np.zeros((0, n)), np.zeros(0), np.array([[1.0, 0, 0], [1.0, 0, 0]]), np.array([1.0, -np.inf]),
+    top = keyed(0, np.zeros((0, n)), np.zeros(0), np.array([[1.0, 0, 0], [1.0, 0, 0]]), np.array([1.0, -np.inf]),
                 np.array([np.inf, -1.0]))  # x0 >= 1 and x0 <= -1: least violation at x0 = 0
-    below = Level(1, np.array([[1.0, 0, 0], [0, 1.0, 0]]), np.array([5.0, 2.0]), np.zeros((0, n)), np.zeros(0),
+    below = keyed(1, np.array([[1.0, 0, 0], [0, 1.0, 0]]), np.array([5.0, 2.0]), np.zeros((0, n)), np.zeros(0),
                   np.zeros(0))
     solution = LexicographicCascade().solve([top, below], n)
     assert solution.status == SOLVED
@@ -236,9 +241,9 @@ def test_a_level_infeasible_on_its_own_gets_its_least_violation_and_the_rest_goe
 
 def test_non_finite_or_crossed_rows_give_a_status_not_an_exception():
     n = 2
-    good = Level(0, np.eye(n), np.ones(n), np.zeros((0, n)), np.zeros(0), np.zeros(0))
-    nan = Level(1, np.eye(n), np.array([np.nan, 0.0]), np.zeros((0, n)), np.zeros(0), np.zeros(0))
-    crossed = Level(2, np.zeros((0, n)), np.zeros(0), np.eye(n), np.ones(n), np.zeros(n))
+    good = keyed(0, np.eye(n), np.ones(n), np.zeros((0, n)), np.zeros(0), np.zeros(0))
+    nan = keyed(1, np.eye(n), np.array([np.nan, 0.0]), np.zeros((0, n)), np.zeros(0), np.zeros(0))
+    crossed = keyed(2, np.zeros((0, n)), np.zeros(0), np.eye(n), np.ones(n), np.zeros(n))
     cascade = LexicographicCascade()
     for bad in (nan, crossed):
         solution = cascade.solve([good, bad], n)
@@ -269,10 +274,10 @@ def test_a_level_proxqp_wrongly_calls_infeasible_is_still_solved():
     b1=np.array([-3.58501003,-1.01125333,2.3329182,2.02375671,3.58835503])
     none = (np.zeros((0, n)), np.zeros(0), np.zeros(0))
     inequalities = random_level(np.random.default_rng(n + 2), 0, n, 0, 3, around_zero=True)
-    top = Level("top", np.zeros((0, n)), np.zeros(0), inequalities.inequality_matrix, inequalities.lower,
+    top = keyed("top", np.zeros((0, n)), np.zeros(0), inequalities.inequality_matrix, inequalities.lower,
                 inequalities.upper)
     for closed_form in (True, False):
         solution = LexicographicCascade(closed_form=closed_form).solve(
-            [top, Level(0, A0, b0, *none), Level(1, A1, b1, *none)], n)
+            [top, keyed(0, A0, b0, *none), keyed(1, A1, b1, *none)], n)
         assert solution.status == SOLVED
         np.testing.assert_allclose(solution.residuals, [0.0, 0.0, 10.7832426], atol=1e-6)

@@ -6,11 +6,17 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import assume, given
 from hypothesis import strategies as st
-from talos_ik import build
-from test_cascade import SETTINGS, assert_lexicographically_no_worse, numerical_ranks_are_clear, reference_cascade
+from test_cascade import (
+    SETTINGS,
+    assert_lexicographically_no_worse,
+    keyed,
+    numerical_ranks_are_clear,
+    reference_cascade,
+)
 
-from dgraph.entities.hierarchy.cascade import Level, LexicographicCascade
-from dgraph.entities.solvers.inverse_dynamics_qp import SOLVED
+from dgraph.control import SOLVED
+from dgraph.control.cascade import LexicographicCascade
+from tests.entities.hierarchy.talos_ik import build
 
 
 def bounds_level(rng, n, on_bound):
@@ -33,11 +39,11 @@ def stacks_under_bounds(draw):
     m0 = draw(st.integers(0, n // 2))
     contacts = rng.normal(size=(m0, n))
     contacts[:, on_bound] = 0.0  # the bounded variables stay free at level 0: x = 0 is its optimum
-    levels = [Level(0, contacts, np.zeros(m0), np.eye(n), lower, upper)]
+    levels = [keyed(0, contacts, np.zeros(m0), np.eye(n), lower, upper)]
     for k in range(1, draw(st.integers(2, 4))):
         m = draw(st.integers(1, n))
         scale = draw(st.sampled_from([1e-3, 1.0, 10.0]))  # small pulls: the bounds need not bind
-        levels.append(Level(k, rng.normal(size=(m, n)), scale * rng.normal(size=m), np.zeros((0, n)), np.zeros(0),
+        levels.append(keyed(k, rng.normal(size=(m, n)), scale * rng.normal(size=m), np.zeros((0, n)), np.zeros(0),
                             np.zeros(0)))
     return levels, n
 
@@ -69,9 +75,9 @@ def test_bounds_active_by_construction_need_no_proxqp():
     optimum can leave it there) and a square level pulling it out (stage 2: the bound binds,
     its multiplier has the right sign)."""
     n = 4
-    top = Level(0, np.zeros((0, n)), np.zeros(0), np.eye(n), -np.ones(n), np.r_[0.0, 2.0 * np.ones(n - 1)])
-    loose = Level(1, np.array([[1.0, 1.0, 1.0, 0.0]]), np.array([3.0]), np.zeros((0, n)), np.zeros(0), np.zeros(0))
-    square = Level(2, np.eye(n), np.array([2.0, 0.5, -0.5, 0.3]), np.zeros((0, n)), np.zeros(0), np.zeros(0))
+    top = keyed(0, np.zeros((0, n)), np.zeros(0), np.eye(n), -np.ones(n), np.r_[0.0, 2.0 * np.ones(n - 1)])
+    loose = keyed(1, np.array([[1.0, 1.0, 1.0, 0.0]]), np.array([3.0]), np.zeros((0, n)), np.zeros(0), np.zeros(0))
+    square = keyed(2, np.eye(n), np.array([2.0, 0.5, -0.5, 0.3]), np.zeros((0, n)), np.zeros(0), np.zeros(0))
     cascade = LexicographicCascade()
     one = cascade.solve([top, loose], n)
     assert one.status == SOLVED and one.qp_levels == 0
