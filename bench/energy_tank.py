@@ -59,12 +59,12 @@ def tick_cost(passive: bool, ticks: int) -> dict[str, np.ndarray]:
     graph = timed_graph(passive)
     control, stage = [], []
     tau, solve_time = graph["solver"].tau, graph["solver"].solve_time
-    tank_stage = graph["tank"].stage if passive else None
+    tank_budget = graph["tank"].budget if passive else None
 
     def pull(t: int) -> None:
         start = time.perf_counter_ns()
-        if tank_stage is not None:
-            tank_stage(t)
+        if tank_budget is not None:
+            tank_budget(t)
             stage.append(time.perf_counter_ns() - start)
         tau(t)
         control.append(time.perf_counter_ns() - start)

@@ -19,7 +19,7 @@ from dgraph.signals.value_types import VALUE_TYPES, value_type
 ENTITY_TYPES = entity_types()  # imports every family, which registers its value types
 
 PACKAGE_TYPES = ("RobotState", "FeatureValue", "TaskEquation", "ContactConstraint", "RowBlock",
-                 "QPSolution", "Passivity", "CascadeSolution", "TankStage", "Estimate")
+                 "QPSolution", "Passivity", "CascadeSolution", "EnergyBudget", "Estimate")
 
 
 def typed_pair(source_type: type | str, target_type: type | str) -> tuple[dg.Entity, dg.Entity]:

@@ -1,5 +1,5 @@
 """Energy: the global energy tank of a passive inverse-dynamics controller (thesis Ch. 5)."""
 
-from dgraph.entities.energy.tank import EnergyTank, TankStage
+from dgraph.entities.energy.tank import EnergyBudget, EnergyTank
 
-__all__ = ["EnergyTank", "TankStage"]
+__all__ = ["EnergyBudget", "EnergyTank"]

@@ -29,8 +29,9 @@ from dgraph.signals.value_types import value_type
 
 @value_type
 @dataclass(slots=True)
-class TankStage:
-    """Stage 1 of the passive controller at one tick (thesis §5.3.3, step (1))."""
+class EnergyBudget:
+    """The tank's budget for one tick, stage 1 of the passive controller (thesis §5.3.3, step
+    (1)): what the tasks store and draw, the valves, and the bound the QP keeps."""
 
     storage: float              # S, sum over the tasks
     storage_rate: float         # S_dot
@@ -92,7 +93,7 @@ class EnergyTank(dg.Entity):
     kept at ``E_min`` and what the clamp adds is summed in ``correction`` (it is not passive,
     so it is shown, not hidden).
 
-    A task whose weights are all zero is out of the stack (its ``Lambda K_P`` history is dropped;
+    A task whose weights are all zero is out of the stack (its previous ``Lambda K_P`` is dropped;
     re-adding it starts with ``P_dot = 0``), and so are the rows of a task whose weight is 0;
     inactive contacts are ignored. With ``enabled: false`` everything is computed for the
     record, but the solver gets scale 1 and no bound (the plain QP), and the energy is integrated
@@ -104,10 +105,11 @@ class EnergyTank(dg.Entity):
     (-0.5 W), ``band`` (J), ``inertia`` (``per_task`` | ``stacked``), ``enabled``, ``clamp``, ``dt``.
     Inputs: ``robot`` (RobotModel state), one per task (a Task's ``equation``), one per contact
     (a contact's ``contact``), ``solution`` (the solver's ``solution``: ``tau``, contacts and forces).
-    States: ``energy`` (J), ``correction`` (J added by the clamp so far), ``history``,
-    ``contact_wrenches``.
-    Outputs: ``stage`` (:class:`TankStage`), ``passivity`` (for the solver), ``alpha``, ``beta``,
-    ``gamma``, ``storage``, ``storage_rate``, ``controllable_power``, ``uncontrollable_power``,
+    States: ``energy`` (J), ``correction`` (J added by the clamp so far), ``previous_stiffness``
+    (``Lambda K_P`` of the previous tick, per task), ``contact_frame_wrenches`` (``T_k f_k`` of
+    the previous solution, contact frame, by contact name).
+    Outputs: ``budget`` (:class:`EnergyBudget`, stage 1), ``passivity`` (for the solver),
+    ``alpha``, ``beta``, ``gamma``, ``storage``, ``storage_rate``, ``controllable_power``, ``uncontrollable_power``,
     ``energy_rate`` (planned ``E_dot``), ``power_bound`` (``H_dot``), ``delivered_power``
     (``-v_j^T tau``, W).
     """
@@ -130,11 +132,12 @@ class EnergyTank(dg.Entity):
     solution = dg.Input(dtype=QPSolution, doc="the solver's solution (tau, contacts, forces), read after the solve")
     energy = dg.State(shape=(), doc="tank energy E = s^2 / 2 (J)")
     correction = dg.State(shape=(), initial=0.0, doc="energy added by the clamp so far (J)")
-    history = dg.State(dtype=dict, doc="Lambda K_P of the previous tick, per task (or stack)")
-    contact_wrenches = dg.State(dtype=dict, doc="contact wrenches T_k f_k of the previous solution, by name")
+    previous_stiffness = dg.State(dtype=dict, doc="Lambda K_P of the previous tick, per task (or stack)")
+    contact_frame_wrenches = dg.State(dtype=dict, doc="wrenches T_k f_k of the previous solution (contact frame), "
+                                                       "by contact name")
 
     def configure(self) -> None:
-        """Check the limits and declare one input per task and contact, and ``stage``."""
+        """Check the limits and declare one input per task and contact, and ``budget``."""
         if not self.minimum_energy < self.maximum_energy:
             raise dg.ParamError(f"{self.name}: minimum_energy must be below maximum_energy", entity=self.name)
         if not self.minimum_energy <= self.initial_energy <= self.maximum_energy:
@@ -149,16 +152,17 @@ class EnergyTank(dg.Entity):
         names = [*self.tasks, *self.contacts]
         declare_named_inputs(self, [(self.tasks, TaskEquation, "equation of task"),
                                     (self.contacts, ContactConstraint, "constraint of contact")])
-        self.declare("stage", dg.Output(type(self)._compute_stage, dtype=TankStage,
-                                        depends=("robot", *names, "energy", "history", "contact_wrenches"),
-                                        doc="stage 1: storage, powers, valves, H_dot bound"))
+        self.declare("budget", dg.Output(type(self)._budget, dtype=EnergyBudget,
+                                         depends=("robot", *names, "energy", "previous_stiffness",
+                                                  "contact_frame_wrenches"),
+                                         doc="stage 1: storage, powers, valves, H_dot bound"))
 
     def reset(self) -> None:
-        """Initial energy, no history."""
+        """Initial energy, no previous stiffness or contact wrench."""
         super().reset()
         self.energy.set(self.initial_energy, 0)
-        self.history.set({}, 0)
-        self.contact_wrenches.set({}, 0)
+        self.previous_stiffness.set({}, 0)
+        self.contact_frame_wrenches.set({}, 0)
 
     def setup(self) -> None:
         """Collect the task and contact inputs."""
@@ -185,11 +189,11 @@ class EnergyTank(dg.Entity):
             return {tuple(blocks): stack(list(blocks.values()))}
         return blocks
 
-    def _compute_stage(self, t: int) -> TankStage:
+    def _budget(self, t: int) -> EnergyBudget:
         state: RobotState = self.robot(t)
         v = state.v
         inverse_mass = state.inverse_mass_matrix
-        previous = self.history(t)
+        previous = self.previous_stiffness(t)
         storage = storage_rate = controllable = 0.0
         stiffnesses = {}
         for key, block in self._blocks(v, t).items():
@@ -201,7 +205,7 @@ class EnergyTank(dg.Entity):
             storage, storage_rate = storage + power.storage, storage_rate + power.storage_rate
             controllable += power.controllable_power
         contact_power = 0.0
-        wrenches = self.contact_wrenches(t)
+        wrenches = self.contact_frame_wrenches(t)
         for inp in self._contact_inputs:
             contact = inp(t)
             if not contact.active:
@@ -214,61 +218,61 @@ class EnergyTank(dg.Entity):
         uncontrollable = uncontrollable_power(v, state.bias_forces, contact_power)
         tank = valves(float(self.energy(t)), controllable, uncontrollable, self.limits)
         bound = tank.beta * tank.gamma * storage_rate + tank.energy_rate
-        return TankStage(storage, storage_rate, controllable, uncontrollable, tank, bound, stiffnesses)
+        return EnergyBudget(storage, storage_rate, controllable, uncontrollable, tank, bound, stiffnesses)
 
     # -- outputs -------------------------------------------------------------------------------
-    @dg.output(dtype=Passivity, depends=("stage", "robot"))
+    @dg.output(dtype=Passivity, depends=("budget", "robot"))
     def passivity(self, t: int) -> Passivity:
         """Scale ``beta gamma`` and bound ``H_dot`` for a passive solver (scale 1, no bound when disabled)."""
         if not self.enabled:
             return Passivity(1.0, None, self.robot(t).v)
-        stage = self.stage(t)
-        return Passivity(stage.scale, stage.power_bound, self.robot(t).v)
+        budget = self.budget(t)
+        return Passivity(budget.scale, budget.power_bound, self.robot(t).v)
 
-    @dg.output(shape=(), depends=("stage",))
+    @dg.output(shape=(), depends=("budget",))
     def alpha(self, t: int) -> float:
         """Overflow valve (Eq. 5.23)."""
-        return self.stage(t).valves.alpha
+        return self.budget(t).valves.alpha
 
-    @dg.output(shape=(), depends=("stage",))
+    @dg.output(shape=(), depends=("budget",))
     def beta(self, t: int) -> float:
         """Output valve (Eq. 5.22)."""
-        return self.stage(t).valves.beta
+        return self.budget(t).valves.beta
 
-    @dg.output(shape=(), depends=("stage",))
+    @dg.output(shape=(), depends=("budget",))
     def gamma(self, t: int) -> float:
         """Power limiter (Eq. 5.21)."""
-        return self.stage(t).valves.gamma
+        return self.budget(t).valves.gamma
 
-    @dg.output(shape=(), depends=("stage",))
+    @dg.output(shape=(), depends=("budget",))
     def storage(self, t: int) -> float:
         """``S`` (J)."""
-        return self.stage(t).storage
+        return self.budget(t).storage
 
-    @dg.output(shape=(), depends=("stage",))
+    @dg.output(shape=(), depends=("budget",))
     def storage_rate(self, t: int) -> float:
         """``S_dot`` (W)."""
-        return self.stage(t).storage_rate
+        return self.budget(t).storage_rate
 
-    @dg.output(shape=(), depends=("stage",))
+    @dg.output(shape=(), depends=("budget",))
     def controllable_power(self, t: int) -> float:
         """``B_sigma`` (W)."""
-        return self.stage(t).controllable_power
+        return self.budget(t).controllable_power
 
-    @dg.output(shape=(), depends=("stage",))
+    @dg.output(shape=(), depends=("budget",))
     def uncontrollable_power(self, t: int) -> float:
         """``B_phi`` (W)."""
-        return self.stage(t).uncontrollable_power
+        return self.budget(t).uncontrollable_power
 
-    @dg.output(shape=(), depends=("stage",))
+    @dg.output(shape=(), depends=("budget",))
     def energy_rate(self, t: int) -> float:
         """Planned ``E_dot = (1 - alpha)(beta gamma B_sigma - B_phi)`` (W)."""
-        return self.stage(t).valves.energy_rate
+        return self.budget(t).valves.energy_rate
 
-    @dg.output(shape=(), depends=("stage",))
+    @dg.output(shape=(), depends=("budget",))
     def power_bound(self, t: int) -> float:
         """``H_dot``, which the QP keeps below ``-v_j^T tau`` (W)."""
-        return self.stage(t).power_bound
+        return self.budget(t).power_bound
 
     @dg.output(shape=(), depends=("robot", "solution"))
     def delivered_power(self, t: int) -> float:
@@ -283,22 +287,22 @@ class EnergyTank(dg.Entity):
         The overflow valve is evaluated again on the actual flow (the QP row bounds it from below
         only, so a tank that planned to drain may fill). A disabled tank's QP ran with scale 1:
         its bookkeeping uses scale 1 too, with the same capacity ``E_max`` and no floor."""
-        stage = self.stage(t)
+        budget = self.budget(t)
         energy = float(self.energy(t))
-        flow = self.delivered_power(t) - (stage.scale if self.enabled else 1.0) * stage.storage_rate
+        flow = self.delivered_power(t) - (budget.scale if self.enabled else 1.0) * budget.storage_rate
         energy += self.dt * (1.0 - self._overflow(energy, flow)) * flow
         if not math.isfinite(energy):
             raise dg.ComputeError(f"{self.name}: tank energy is not finite at tick {t} (delivered power "
-                                  f"{self.delivered_power(t)}, S_dot {stage.storage_rate})", entity=self.name,
+                                  f"{self.delivered_power(t)}, S_dot {budget.storage_rate})", entity=self.name,
                                   signal="energy")
         kept = min(max(energy, self.minimum_energy), self.maximum_energy) if self.clamp and self.enabled else energy
         self.energy.stage(kept)
         self.correction.stage(float(self.correction(t)) + kept - energy)
-        self.history.stage(stage.stiffness)
+        self.previous_stiffness.stage(budget.stiffness)
         solution = self.solution(t)
-        self.contact_wrenches.stage({c.name: c.force_generator @ f for c, f in
-                                     zip(solution.contacts, solution.forces, strict=True)
-                                     if c.force_reference is None})
+        self.contact_frame_wrenches.stage({c.name: c.force_generator @ f for c, f in
+                                           zip(solution.contacts, solution.forces, strict=True)
+                                           if c.force_reference is None})
 
     def _overflow(self, energy: float, flow: float) -> float:
         """``alpha'``: the overflow valve of the actual flow, which also rejects the part of one
@@ -310,6 +314,6 @@ class EnergyTank(dg.Entity):
         return min(1.0, max(overflow_valve(energy, True, self.limits), 1.0 - headroom))
 
     def commit_state(self, t_next: int) -> None:
-        """Publish the new energy, correction and histories."""
-        for state in (self.energy, self.correction, self.history, self.contact_wrenches):
+        """Publish the new energy, correction, stiffness and contact wrenches."""
+        for state in (self.energy, self.correction, self.previous_stiffness, self.contact_frame_wrenches):
             state.commit(t_next)

@@ -210,17 +210,17 @@ def test_removing_a_task_drops_its_history_and_re_adding_it_starts_without_a_rat
     g = passive_graph()
     states = list(moving_states(12, seed=6))
     run(g, states[:5])
-    assert "posture_task" in g["tank"].history(g.t)
+    assert "posture_task" in g["tank"].previous_stiffness(g.t)
     g["posture_task"].weight.set(0.0)
     run(g, states[5:8])
-    assert "posture_task" not in g["tank"].history(g.t)
+    assert "posture_task" not in g["tank"].previous_stiffness(g.t)
     g["posture_task"].weight.set(0.1)
     q, v = states[8]
     g["robot"].q.set(q)
     g["robot"].v.set(v)
     tank = g["tank"]
-    stage, history = tank.stage(g.t), tank.history(g.t)
-    assert "posture_task" in stage.stiffness and "posture_task" not in history
+    budget, history = tank.budget(g.t), tank.previous_stiffness(g.t)
+    assert "posture_task" in budget.stiffness and "posture_task" not in history
     # S_dot rebuilt by hand: P_dot by finite difference for the tasks with a history, 0 for the
     # re-added posture (no spike from a P that jumped from nothing)
     state = g["robot"].state(g.t)
@@ -230,7 +230,7 @@ def test_removing_a_task_drops_its_history_and_re_adding_it_starts_without_a_rat
         p = stiffness(block, inertia)
         rate = (p - history[key]) / 0.001 if key in history else np.zeros_like(p)
         expected += task_power(block, inertia, rate).storage_rate
-    assert stage.storage_rate == pytest.approx(expected, rel=1e-9, abs=1e-9)
+    assert budget.storage_rate == pytest.approx(expected, rel=1e-9, abs=1e-9)
 
 
 def test_stacked_inertia_keeps_the_passivity_row():
