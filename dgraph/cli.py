@@ -127,11 +127,13 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    """Load and validate; list every problem."""
-    import dgraph
+    """Load and validate without running a tick; list every problem (refused plugs with their
+    file and line, unplugged inputs, loops, what entities report, plugins that failed)."""
+    from dgraph.files import check
+    from dgraph.registry import plugin_errors
 
-    graph = dgraph.load(args.file)
-    problems = graph.problems()
+    graph, problems = check(args.file)
+    problems += list(plugin_errors().values())
     if problems:
         print(f"{args.file}: {len(problems)} problem(s)")
         for p in problems:

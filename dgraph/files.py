@@ -564,8 +564,26 @@ def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = 
         raise GraphFileError(f"could not build the graph: {type(exc).__name__}: {exc}", file=file) from exc
 
 
-def _build(composition: _Composition, file: str) -> Graph:
-    """Make the entities, plug them, set the constants, check what is recorded."""
+def check(path: str | Path) -> tuple[Graph, list[str]]:
+    """Everything wrong with the graph file at ``path``, one line each, without running a tick:
+    every plug the graph refuses (a structured type or a shape that does not fit, a loop), each
+    located at its file and line, then what :meth:`Graph.problems` finds in the graph built from
+    the rest (an input left unplugged by a refused plug is not listed again), with that graph.
+    A mistake that stops the build (YAML, schema, an unknown type or parameter) raises
+    :class:`GraphFileError`, as :func:`load` does.
+    """
+    refused: list[tuple[str, GraphFileError]] = []
+    file = str(path)
+    graph = _build(_compose(read_text(path), file), file, refused)
+    unplugged = {f"input {target} is not plugged, not set and has no default" for target, _ in refused}
+    return graph, [str(error) for _, error in refused] + [p for p in graph.problems() if p not in unplugged]
+
+
+def _build(composition: _Composition, file: str, refused: list[tuple[str, GraphFileError]] | None = None
+           ) -> Graph:
+    """Make the entities, plug them, set the constants, check what is recorded. With a
+    ``refused`` list, a refused plug is added to it (with its target) and the build goes on
+    without it; otherwise it is raised."""
     entities = composition.declared()
     _check_settings(composition.sets, entities, file)
     params, constants = _split_settings(composition.sets, entities)
@@ -577,7 +595,10 @@ def _build(composition: _Composition, file: str) -> Graph:
         try:
             graph.plug(source, target)
         except DGraphError as exc:
-            raise _refusal(exc, at, (source, target), entities) from None
+            error = _refusal(exc, at, (source, target), entities)
+            if refused is None:
+                raise error from None
+            refused.append((target, error))
     for key, (value, at) in constants.items():
         refused = _set_constant(graph, key, value)
         if refused:

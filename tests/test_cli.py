@@ -69,6 +69,18 @@ def test_check_reports_problems(tmp_path, capsys):
     assert "OK (7 entities, 7 plugs" in capsys.readouterr().out
 
 
+def test_check_lists_every_plug_of_the_wrong_type_with_its_line(tmp_path, capsys):
+    scenario = tmp_path / "wrong_plugs.yaml"
+    scenario.write_text(f"extends: {ROOT / 'graphs' / 'talos_standing.yaml'}\nplugs:\n"
+                        "  - com.feature -> solver.com_task\n  - left_foot.contact -> solver.waist_task\n")
+    assert main(["check", str(scenario)]) == 1
+    out = capsys.readouterr().out
+    assert "2 problem(s)" in out
+    assert f"{scenario}:3 [plugs.0]: cannot plug com.feature FeatureValue into solver.com_task TaskEquation" in out
+    assert f"{scenario}:4 [plugs.1]: cannot plug left_foot.contact ContactConstraint into solver.waist_task " \
+           "TaskEquation" in out
+
+
 def test_profile_lists_every_entity(tmp_path, capsys):
     assert main(["profile", PD, "--ticks", "200"]) == 0
     out = capsys.readouterr().out
