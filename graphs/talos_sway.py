@@ -22,6 +22,7 @@ from dgraph.entities.solvers import InverseDynamicsSolver
 from dgraph.entities.tasks import Task
 from sim.device import MujocoDevice
 
+ROBOT = "talos"  # the robot model, named once: every entity that loads a model takes this one
 HALF_SITTING_COM = [-0.0031639, 0.0012374, 0.8766814]
 SENSORS = ("imu_orientation", "imu_angular_velocity", "imu_linear_acceleration", "encoder_position",
            "encoder_velocity", "ft_left_ankle", "ft_right_ankle")
@@ -36,7 +37,7 @@ TASKS = ("com_task", "waist_task", "posture_task", "momentum_task")
 FEATURES = {
     "com_task": lambda: CenterOfMass("com"),
     "waist_task": lambda: FramePose("waist", frame="base_link", mask="000111"),
-    "posture_task": lambda: JointPosture("posture", model="talos"),
+    "posture_task": lambda: JointPosture("posture", model=ROBOT),
     "momentum_task": lambda: AngularMomentum("momentum"),
 }
 
@@ -49,9 +50,9 @@ def build(duration: float = 20.0, tasks: tuple[str, ...] = TASKS, record: bool =
     """
     g = dg.Graph(dt=0.001, name="talos_sway")
     g.duration = duration
-    g.add(MujocoDevice("device", model="talos", scene="flat", control_mode="torque"))
-    g.add(FloatingBaseEstimator("estimator", model="talos"))
-    g.add(RobotModel("robot", model="talos"))
+    g.add(MujocoDevice("device", model=ROBOT, scene="flat", control_mode="torque"))
+    g.add(FloatingBaseEstimator("estimator", model=ROBOT))
+    g.add(RobotModel("robot", model=ROBOT))
     features = {task: FEATURES[task]() for task in TASKS if task in tasks}  # com_task is required
     for feature in features.values():
         g.add(feature)
@@ -63,7 +64,7 @@ def build(duration: float = 20.0, tasks: tuple[str, ...] = TASKS, record: bool =
         g.add(Task(name, critical_damping=True) if name == "posture_task" else Task(name))
     for side in ("left", "right"):
         g.add(Contact6d(f"{side}_foot", frame=f"{side}_sole_link", mu=0.3, min_normal_force=1.0))
-    g.add(InverseDynamicsSolver("solver", model="talos", tasks=list(tasks), contacts=["left_foot", "right_foot"]))
+    g.add(InverseDynamicsSolver("solver", model=ROBOT, tasks=list(tasks), contacts=["left_foot", "right_foot"]))
 
     for sensor in SENSORS:
         g.plug(f"device.{sensor}", f"estimator.{sensor}")
@@ -90,7 +91,7 @@ def build(duration: float = 20.0, tasks: tuple[str, ...] = TASKS, record: bool =
         g[name].kp.set(30.0)
         g[name].kd.set(11.0)
     if record:
-        g.add(RobotView("view", model="talos", decimation=20))
+        g.add(RobotView("view", model=ROBOT, decimation=20))
         g.plug("device.q", "view.q")
         g.add(Recorder("recorder", signals=RECORDED))
     return g

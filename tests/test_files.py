@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -620,6 +621,13 @@ def test_every_graph_file_names_its_robot_once(path):
     robots = [data["robot"] for data in files if "robot" in data]
     models = {e.given_params["model"] for e in dg.load(path) if isinstance(e.given_params.get("model"), str)}
     assert len(robots) == len(models) <= 1 and set(robots) == models
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "graphs").glob("*.py")), ids=lambda p: p.name)
+def test_every_graph_script_names_its_robot_once(path):
+    text = path.read_text()
+    assert re.findall(r"\bmodel=[\"']", text) == []  # every entity takes the one constant
+    assert len(re.findall(r"^ROBOT = [\"'][\w-]+[\"']", text, flags=re.MULTILINE)) == 1
 
 
 SELF_CONTAINED = "3af9cc3"
