@@ -53,11 +53,6 @@ class RowBlock:
         """No row over ``n`` variables (a level whose tasks are all inactive)."""
         return cls(np.zeros((0, n)), np.zeros(0), np.zeros((0, n)), np.zeros(0), np.zeros(0), key=key)
 
-    @property
-    def columns(self) -> int:
-        """Number of variables the rows are written over."""
-        return self.equality_matrix.shape[1]
-
     def shape_problem(self, columns: int) -> str | None:
         """What is inconsistent in the arrays' shapes (``None`` if nothing)."""
         m_e, m_i = len(self.equality_vector), len(self.lower)

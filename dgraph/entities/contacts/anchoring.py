@@ -1,8 +1,10 @@
-"""AnchoredContact: the activation and anchoring shared by the contacts."""
+"""AnchoredContact: what the contacts share: activation, anchoring, the bounds of their friction rows."""
 
 from __future__ import annotations
 
 from typing import Any
+
+import numpy as np
 
 import dgraph as dg
 from dgraph.entities.activation import Activatable
@@ -21,6 +23,15 @@ class AnchoredContact(Activatable):
     has_state = True
 
     anchor = dg.State(dtype="object", doc="anchored placement or point; None while inactive")
+
+    def friction_bounds(self, n_faces: int) -> tuple[np.ndarray, np.ndarray]:
+        """The bounds of the friction rows: ``n_faces`` faces ``c_i . f <= 0``, then the normal
+        force within ``[min_normal_force, max_normal_force]`` (the subclass's parameters;
+        ``ParamError`` when crossed)."""
+        if self.max_normal_force < self.min_normal_force:
+            raise dg.ParamError(f"{self.name}: max_normal_force < min_normal_force", entity=self.name)
+        return (np.concatenate([np.full(n_faces, -np.inf), [self.min_normal_force]]),
+                np.concatenate([np.zeros(n_faces), [self.max_normal_force]]))
 
     def anchor_or_here(self, t: int) -> Any:
         """The anchor, or the current placement before the first anchoring tick."""

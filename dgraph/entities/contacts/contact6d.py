@@ -132,8 +132,6 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
 
     def configure(self) -> None:
         """Precompute the force generator and the friction rows."""
-        if self.max_normal_force < self.min_normal_force:
-            raise dg.ParamError(f"{self.name}: max_normal_force < min_normal_force", entity=self.name)
         corners = corner_positions(self.front, self.back, self.half_width)
         generator = force_generator(corners)
         if self.forces == "wrench":
@@ -147,8 +145,7 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
             normal_sum[0, 2::3] = 1.0
         self._friction = np.vstack([cone, normal_sum])
         self._gains = Gains(self)
-        self._lower = np.concatenate([np.full(len(cone), -np.inf), [self.min_normal_force]])
-        self._upper = np.concatenate([np.zeros(len(cone)), [self.max_normal_force]])
+        self._lower, self._upper = self.friction_bounds(len(cone))
         self._anchor: tuple[pin.SE3, list[list[float]], list[float]] | None = None  # the anchor taken apart
 
     def here(self, t: int) -> pin.SE3:

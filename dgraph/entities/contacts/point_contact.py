@@ -71,11 +71,8 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
         normal = np.asarray(self.normal, dtype=float)
         if normal.shape != (3,) or not np.linalg.norm(normal) > 1e-9:
             raise dg.ParamError(f"{self.name}: normal must be a non-zero 3-vector", entity=self.name)
-        if self.max_normal_force < self.min_normal_force:
-            raise dg.ParamError(f"{self.name}: max_normal_force < min_normal_force", entity=self.name)
         self._friction = point_friction(normal, self.mu)
-        self._lower = np.array([-np.inf] * 4 + [self.min_normal_force])
-        self._upper = np.array([0.0] * 4 + [self.max_normal_force])
+        self._lower, self._upper = self.friction_bounds(len(self._friction) - 1)
         self._generator = np.eye(3)
         self._rotation = np.eye(3)  # forces are in world axes; shared by every tick's constraint: read-only
         self._rotation.flags.writeable = False

@@ -29,7 +29,7 @@ class JointLimits(Activatable, dg.Entity):
     the graph's), ``velocity_scale`` (fraction of ``v_max`` allowed).
     Inputs: ``robot`` (RobotModel state, for ``q``), ``active`` (bool; commands ``activate`` /
     ``deactivate``).
-    Outputs: ``rows`` (:class:`RowBlock`, inequalities over ``v``).
+    Outputs: ``rows`` (:class:`~dgraph.control.rows.RowBlock`, inequalities over ``v``).
     """
 
     model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the rows)")

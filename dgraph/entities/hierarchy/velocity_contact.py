@@ -20,7 +20,10 @@ class VelocityContact(Contact6d):
     is the gain ``lambda`` (1/s; 0: ``J_c v = 0``, the thesis's form) and ``kd`` is not used; the
     ``contact`` output remains that of a Contact6d with these gains.
 
-    Output (besides Contact6d's): ``rows`` (:class:`RowBlock`, 6 equalities over ``v``).
+    Parameters, inputs and state: those of :class:`~dgraph.entities.contacts.Contact6d`
+    (``robot``, ``kp`` as ``lambda``, ``kd`` unused here, ``active``; ``anchor``).
+    Outputs: those of Contact6d, and ``rows`` (:class:`~dgraph.control.rows.RowBlock`, 6
+    equalities over ``v``, none while inactive).
     """
 
     @dg.output(dtype=RowBlock, depends=("contact",))

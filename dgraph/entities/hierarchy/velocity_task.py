@@ -34,7 +34,7 @@ class VelocityTask(Activatable, dg.Entity):
     read, for ``J v``), ``gain`` or the three adaptive-gain
     inputs, ``active`` (bool; commands ``activate`` / ``deactivate``; an inactive task adds
     no row to its level).
-    Outputs: ``rows`` (:class:`RowBlock`, plugged into a hierarchical solver),
+    Outputs: ``rows`` (:class:`~dgraph.control.rows.RowBlock`, plugged into a hierarchical solver),
     ``desired_velocity`` (``x_dot* - lambda e``), ``gain_value`` (``lambda``, per row).
     """
 
