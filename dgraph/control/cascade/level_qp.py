@@ -90,24 +90,11 @@ class LevelQP:
         (``x`` unchanged after a failure). ``key`` names the structure of the levels down to
         this one (its workspace and warm start)."""
         free, m_own = basis.shape[1], len(level.lower)
-        kept_matrix, kept_lower, kept_upper = kept.stacked(len(x))
-        # a kept row that z cannot move (C Z = 0: its directions are fixed above) holds at z = 0 and
-        # stays out: rows of 1e-16 wreck ProxQP's equilibration (false infeasibility reports)
-        mask = movable(kept_matrix, basis, self.rank_tolerance)
-        kept_matrix, kept_lower, kept_upper = kept_matrix[mask], kept_lower[mask], kept_upper[mask]
-        m_kept = len(kept_lower)
+        kept_rows = self._movable_kept(kept, x, basis)
+        m_kept = len(kept_rows[1])
         ws = self._workspace((*key, m_kept, m_own), free + m_own, m_kept + m_own, free)
         projected = level.equality_matrix @ basis
-        ws.H[:free, :free] = 2.0 * projected.T @ projected
-        ws.g[:free] = -2.0 * projected.T @ (level.equality_vector - level.equality_matrix @ x)
-        for rows, matrix, lower, upper, widest in (
-                (slice(0, m_kept), kept_matrix, kept_lower, kept_upper, 0.0),
-                (slice(m_kept, None), level.inequality_matrix, level.lower, level.upper, -INFINITY)):
-            ws.C[rows, :free] = matrix @ basis
-            values = matrix @ x
-            # kept rows hold at z = 0 (x satisfies them up to the tolerances of the levels between)
-            ws.lower[rows] = np.clip(np.minimum(lower - values, -widest), -INFINITY, INFINITY)
-            ws.upper[rows] = np.clip(np.maximum(upper - values, widest), -INFINITY, INFINITY)
+        self._write(ws, level, x, basis, projected, kept_rows)
         if tick is None or tick != ws.tick:
             ws.guess, ws.tick = ws.latest, tick
         status, iterations = self._run(ws, self._guess(ws, level, x, basis))
@@ -121,6 +108,31 @@ class LevelQP:
         solution = x + basis @ self._polish(ws, projected, target, free, m_kept)
         ws.latest = (solution, ws.qp.results.z.copy())
         return status, iterations, solution
+
+    def _movable_kept(self, kept: KeptRows, x: np.ndarray,
+                      basis: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The kept rows ``(C, l, u)`` that ``z`` can move. A kept row that it cannot (``C Z = 0``:
+        its directions are fixed above) holds at ``z = 0`` and stays out: rows of 1e-16 wreck
+        ProxQP's equilibration (false infeasibility reports)."""
+        matrix, lower, upper = kept.stacked(len(x))
+        mask = movable(matrix, basis, self.rank_tolerance)
+        return matrix[mask], lower[mask], upper[mask]
+
+    @staticmethod
+    def _write(ws: _Workspace, level: RowBlock, x: np.ndarray, basis: np.ndarray, projected: np.ndarray,
+               kept_rows: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
+        """The level's cost and rows in ``(z, s)`` (module docstring) into the workspace."""
+        free, m_kept = basis.shape[1], len(kept_rows[1])
+        ws.H[:free, :free] = 2.0 * projected.T @ projected
+        ws.g[:free] = -2.0 * projected.T @ (level.equality_vector - level.equality_matrix @ x)
+        for rows, matrix, lower, upper, widest in (
+                (slice(0, m_kept), *kept_rows, 0.0),
+                (slice(m_kept, None), level.inequality_matrix, level.lower, level.upper, -INFINITY)):
+            ws.C[rows, :free] = matrix @ basis
+            values = matrix @ x
+            # kept rows hold at z = 0 (x satisfies them up to the tolerances of the levels between)
+            ws.lower[rows] = np.clip(np.minimum(lower - values, -widest), -INFINITY, INFINITY)
+            ws.upper[rows] = np.clip(np.maximum(upper - values, widest), -INFINITY, INFINITY)
 
     def _closest_feasible(self, ws: _Workspace) -> tuple[Status, int]:
         """A cold solve with ProxQP's ``primal_infeasibility_solving``: on a feasible problem

@@ -190,9 +190,20 @@ class EnergyTank(dg.Entity):
         return blocks
 
     def _budget(self, t: int) -> EnergyBudget:
+        """Stage 1 at ``t`` (class docstring): the tasks' storage and powers, the contacts'
+        powers, the valves and the bound ``H_dot``."""
         state: RobotState = self.robot(t)
-        v = state.v
-        inverse_mass = state.inverse_mass_matrix
+        storage, storage_rate, controllable, stiffnesses = self._task_powers(state, t)
+        controllable, contact_power = self._contact_powers(state.v, controllable, t)
+        uncontrollable = uncontrollable_power(state.v, state.bias_forces, contact_power)
+        tank = valves(float(self.energy(t)), controllable, uncontrollable, self.limits)
+        bound = tank.beta * tank.gamma * storage_rate + tank.energy_rate
+        return EnergyBudget(storage, storage_rate, controllable, uncontrollable, tank, bound, stiffnesses)
+
+    def _task_powers(self, state: RobotState, t: int) -> tuple[float, float, float, dict[Any, np.ndarray]]:
+        """``S``, ``S_dot`` and ``B_sigma`` summed over the active tasks (Eqs. 5.11, 5.18), and
+        each task's ``P = Lambda K_P`` (its rate by finite difference from the previous tick's)."""
+        v, inverse_mass = state.v, state.inverse_mass_matrix
         previous = self.previous_stiffness(t)
         storage = storage_rate = controllable = 0.0
         stiffnesses = {}
@@ -204,6 +215,12 @@ class EnergyTank(dg.Entity):
             power = task_power(block, inertia, rate)
             storage, storage_rate = storage + power.storage, storage_rate + power.storage_rate
             controllable += power.controllable_power
+        return storage, storage_rate, controllable, stiffnesses
+
+    def _contact_powers(self, v: np.ndarray, controllable: float, t: int) -> tuple[float, float]:
+        """``controllable`` plus ``(J_F v)^T T_F F_F`` of each force task's contact (Eq. 5.18),
+        and the power ``sum_k (J_k v)^T T_k f_k`` of the other active contacts' forces of the
+        previous solution (Eq. 5.19; errata E17)."""
         contact_power = 0.0
         wrenches = self.contact_frame_wrenches(t)
         for inp in self._contact_inputs:
@@ -215,10 +232,7 @@ class EnergyTank(dg.Entity):
                 controllable += float(twist @ (contact.force_generator @ contact.force_reference))
             elif contact.name in wrenches:
                 contact_power += float(twist @ wrenches[contact.name])
-        uncontrollable = uncontrollable_power(v, state.bias_forces, contact_power)
-        tank = valves(float(self.energy(t)), controllable, uncontrollable, self.limits)
-        bound = tank.beta * tank.gamma * storage_rate + tank.energy_rate
-        return EnergyBudget(storage, storage_rate, controllable, uncontrollable, tank, bound, stiffnesses)
+        return controllable, contact_power
 
     # -- outputs -------------------------------------------------------------------------------
     @dg.output(dtype=Passivity, depends=("budget", "robot"))
