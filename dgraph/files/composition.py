@@ -1,0 +1,265 @@
+"""The composition of a chain of graph files: the file, the files it ``extends``, each parsed
+and schema-checked on its own, then laid over one another from the deepest base up (the
+command line's settings last), into tables of entities, plugs, settings and records that
+remember the file and key that wrote each entry."""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from dgraph.errors import DGraphError, GraphFileError
+from dgraph.files.paths import from_file, relative
+from dgraph.files.schema import PLUG_RE, validate
+from dgraph.files.source import COMMAND_LINE, At, Document, latest, plain_data, read_text
+from dgraph.params import Param
+from dgraph.registry import get_type
+
+MAX_EXTENDS = 8
+"""Longest chain of files extending one another."""
+RECORDER_NAME = "recorder"
+SCALARS = ("name", "dt", "duration", "robot")
+"""Graph-level keys: the nearest file of a chain that gives one wins."""
+
+Setting = tuple[Any, At]
+"""A value and where it was set."""
+
+
+class CommandLine(Document):
+    """The ``--set entity.name=value`` settings of the command line: a last layer over the files."""
+
+    def __init__(self) -> None:
+        super().__init__(COMMAND_LINE)
+        self.layer = MAX_EXTENDS + 1
+
+    def error(self, message: str, path: tuple[Any, ...], cause: DGraphError | None = None) -> GraphFileError:
+        """A :class:`GraphFileError` naming the ``--set`` option of ``path``."""
+        key = str(path[-1])
+        return GraphFileError(message, file=COMMAND_LINE, key=f"--set {key}",
+                              entity=cause.entity if cause else key.partition(".")[0],
+                              signal=cause.signal if cause else None)
+
+
+def _parse_file(text: str, file: str) -> tuple[dict[str, Any], Document]:
+    """Parse and schema-check the text of one file; returns the data and its line map."""
+    data, doc = plain_data(text, file)
+    return validate(data, doc), doc
+
+
+def _chain(text: str, file: str) -> list[tuple[dict[str, Any], Document]]:
+    """The file and every file it extends, the deepest base first (its layer is 0)."""
+    data, doc = _parse_file(text, file)
+    chain = [(data, doc)]
+    seen = {Path(file).resolve()}
+    while "extends" in data:
+        base = _base_file(data["extends"], doc, seen)
+        try:
+            base_text = read_text(base)
+        except GraphFileError as exc:
+            raise doc.error(f"cannot extend {data['extends']!r}: {exc}", ("extends",)) from None
+        data, doc = _parse_file(base_text, str(base))  # a mistake in the base names the base
+        chain.append((data, doc))
+    chain.reverse()
+    for layer, (_, doc) in enumerate(chain):
+        doc.layer = layer
+    return chain
+
+
+def _base_file(extends: str, doc: Document, seen: set[Path]) -> Path:
+    """The file that ``doc`` extends, refused if not a .yaml file, in a cycle or too deep."""
+    base = Path(doc.file).parent / extends
+    if base.suffix not in (".yaml", ".yml"):
+        raise doc.error(f"can only extend a .yaml graph file, not {extends!r}", ("extends",))
+    if base.resolve() in seen:
+        raise doc.error(f"{extends!r} extends, directly or not, this file (a cycle)", ("extends",))
+    if len(seen) > MAX_EXTENDS:
+        raise doc.error(f"more than {MAX_EXTENDS} files extend one another", ("extends",))
+    seen.add(base.resolve())
+    return base
+
+
+@dataclass
+class EntitySpec:
+    """An entity as the files describe it: type, parameters, and where it was defined."""
+
+    type: str
+    params: dict[str, Any]
+    at: At
+    """Its definition: ``entities.NAME`` of a file (``record`` for the recorder it stands for)."""
+
+    def where(self, key: str) -> At:
+        """The place of its ``type`` or ``params``."""
+        return self.at.within(key) if self.at.path[0] == "entities" else self.at
+
+
+def owner(key: str) -> str:
+    """The entity of ``entity.name``."""
+    return key.partition(".")[0]
+
+
+def suggest(name: str, names: Iterable[str]) -> str:
+    """``; did you mean 'x'?`` for the closest of ``names``, or nothing."""
+    close = difflib.get_close_matches(name, list(names), n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+class Composition:
+    """A graph described by a chain of files, every piece with the file and key that wrote it."""
+
+    def __init__(self, top: Document):
+        self.top = top
+        self.scalars: dict[str, Setting] = {}
+        self.entities: dict[str, EntitySpec] = {}
+        self.plugs: dict[str, tuple[str, At]] = {}  # input -> (output, where)
+        self.sets: dict[str, Setting] = {}  # entity.name -> (value, where)
+        self.records: dict[str, At] = {}
+
+    def apply(self, data: dict[str, Any], doc: Document) -> None:
+        """Lay one file over what the files it extends described."""
+        for key in SCALARS:
+            if key in data:
+                self.scalars[key] = (data[key], At(doc, (key,)))
+        self._remove(data.get("remove", {}), doc)
+        for name, spec in data.get("entities", {}).items():
+            self.entities[name] = EntitySpec(spec["type"], dict(spec.get("params") or {}), At(doc, ("entities", name)))
+        for section in ("set", "overrides"):
+            for key, value in data.get(section, {}).items():
+                self._take(key, At(doc, (section, key)))
+                self.sets[key] = (value, At(doc, (section, key)))
+        for i, plug in enumerate(data.get("plugs", [])):
+            source, target = PLUG_RE.match(plug).groups()
+            self._take(target, At(doc, ("plugs", i)))
+            self.plugs[target] = (source, At(doc, ("plugs", i)))
+        for i, key in enumerate(data.get("record", [])):
+            if key in self.records:
+                raise At(doc, ("record", i)).error(f"{key} is already recorded ({self.records[key].where()})")
+            self.records[key] = At(doc, ("record", i))
+
+    def _take(self, key: str, at: At) -> None:
+        """Forget what the files below plugged into or set on ``key``: ``at`` replaces it. One
+        file may not say it twice."""
+        for table, how in ((self.plugs, "plugged"), (self.sets, "set")):
+            earlier = table.pop(key, None)
+            if earlier is not None and earlier[1].doc is at.doc:
+                raise at.error(f"{key} is already {how} by this file ({earlier[1].where()})")
+
+    def _remove(self, remove: dict[str, list[str]], doc: Document) -> None:
+        for i, name in enumerate(remove.get("entities", [])):
+            self._remove_entity(name, At(doc, ("remove", "entities", i)))
+        for i, text in enumerate(remove.get("plugs", [])):
+            self._unplug(text, At(doc, ("remove", "plugs", i)))
+        for section, table, how in (("set", self.sets, "set"), ("record", self.records, "recorded")):
+            for i, key in enumerate(remove.get(section, [])):
+                if table.pop(key, None) is None:
+                    raise At(doc, ("remove", section, i)).error(
+                        f"{key} is not {how} by the files this one extends{suggest(key, table)}")
+
+    def _remove_entity(self, name: str, at: At) -> None:
+        """Take out entity ``name`` with every plug, setting and record that names it."""
+        if self.entities.pop(name, None) is None:
+            raise at.error(f"no entity {name!r} to remove in the files this one extends{suggest(name, self.entities)}")
+        self.plugs = {t: (s, a) for t, (s, a) in self.plugs.items() if name not in (owner(t), owner(s))}
+        self.sets = {key: v for key, v in self.sets.items() if owner(key) != name}
+        self.records = {key: a for key, a in self.records.items() if owner(key) != name}
+
+    def _unplug(self, text: str, at: At) -> None:
+        """Take out the plug ``source -> target``, or whatever is plugged into ``target``."""
+        source, arrow, target = (part.strip() for part in text.rpartition("->"))
+        plugged = self.plugs.get(target)
+        if plugged is None or (arrow and plugged[0] != source):
+            found = f" ({target} is plugged to {plugged[0]})" if plugged else ""
+            raise at.error(f"no plug {text.strip()!r} in the files this one extends{found}")
+        del self.plugs[target]
+
+    def declared(self) -> dict[str, EntitySpec]:
+        """The entities, with the Recorder that ``record`` stands for."""
+        if not self.records:
+            return dict(self.entities)
+        record = At(list(self.records.values())[-1].doc, ("record",))
+        if RECORDER_NAME in self.entities:
+            raise latest(record, self.entities[RECORDER_NAME].at).error(
+                f"'record' creates an entity named {RECORDER_NAME!r}, which already exists")
+        return {**self.entities, RECORDER_NAME: EntitySpec("Recorder", {"signals": list(self.records)}, record)}
+
+    def flat(self) -> dict[str, Any]:
+        """The plain data of one file, in the top file's folder, that describes this graph."""
+        params, constants = split_settings(self.sets, self.entities)
+        data: dict[str, Any] = {key: self.scalars[key][0] for key in SCALARS if key in self.scalars}
+        data["entities"] = {name: _flat_entity(spec, params.get(name, {}), self.top.folder)
+                            for name, spec in self.entities.items()}
+        if self.plugs:
+            data["plugs"] = [f"{source} -> {target}" for target, (source, _) in self.plugs.items()]
+        if constants:
+            data["set"] = {key: value for key, (value, _) in constants.items()}
+        if self.records:
+            data["record"] = list(self.records)
+        return data
+
+
+def compose(text: str, file: str, command_line: dict[str, Any] | None = None) -> Composition:
+    """The graph that the file and the files it extends describe, then the command line's settings."""
+    chain = _chain(text, file)
+    composition = Composition(chain[-1][1])
+    for data, doc in chain:
+        composition.apply(data, doc)
+    if command_line:
+        composition.apply({"set": command_line}, CommandLine())
+    return composition
+
+
+def _decls(spec: EntitySpec | None) -> dict[str, Param]:
+    """The parameter declarations of an entity's type (none if the type is unknown)."""
+    try:
+        return get_type(spec.type)._param_decls if spec is not None else {}
+    except DGraphError:
+        return {}  # the unknown type is reported where the entity is made
+
+
+def split_settings(settings: dict[str, Setting], entities: dict[str, EntitySpec]
+                   ) -> tuple[dict[str, dict[str, Setting]], dict[str, Setting]]:
+    """Sort ``entity.name`` settings into parameters (by entity) and input constants."""
+    params: dict[str, dict[str, Setting]] = {}
+    constants: dict[str, Setting] = {}
+    for key, setting in settings.items():
+        entity, _, name = key.partition(".")
+        if name in _decls(entities.get(entity)):
+            params.setdefault(entity, {})[name] = setting
+        else:
+            constants[key] = setting
+    return params, constants
+
+
+def _flat_entity(spec: EntitySpec, settings: dict[str, Setting], folder: Path | None) -> dict[str, Any]:
+    """An entity's type and parameters (its definition's, then the settings'), paths from ``folder``."""
+    decls = _decls(spec)
+    params = {key: (value, spec.at.doc) for key, value in spec.params.items()}
+    params.update({key: (value, at.doc) for key, (value, at) in settings.items()})
+    out: dict[str, Any] = {"type": spec.type}
+    if params:
+        out["params"] = {key: relative(from_file(value, decls.get(key), doc), decls.get(key), folder)
+                         for key, (value, doc) in params.items()}
+    return out
+
+
+def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], Document]:
+    """The graph that graph-file text describes, as the plain data of one file without
+    ``extends`` (the files it extends composed, parameters given by ``set`` folded into their
+    entities, ``path`` parameters relative to the file's folder), and the file's line map.
+
+    The YAML, the schema and what ``remove`` names are checked here; types, parameters and
+    signals when the graph is built (:func:`~dgraph.files.loads`).
+    """
+    composition = compose(text, file)
+    return composition.flat(), composition.top
+
+
+def declared_entities(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Entity specs of parsed data (see :func:`parse`), including the Recorder that ``record``
+    stands for."""
+    entities = dict(data["entities"])
+    if "record" in data:
+        entities[RECORDER_NAME] = {"type": "Recorder", "params": {"signals": data["record"]}}
+    return entities

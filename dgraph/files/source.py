@@ -1,0 +1,191 @@
+"""The source of a graph file: its text read safely, converted to plain data, and the places
+(file, line, key) in it that errors point at.
+
+The YAML is composed with the safe loader and converted node by node; only plain scalars, lists
+and mappings are accepted (no tags, anchors, aliases or merge keys), so a file can never
+construct objects or run code.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from dgraph.errors import DGraphError, GraphFileError
+
+MAX_BYTES = 4 * 1024 * 1024
+MAX_NUMBER_CHARS = 64
+COMMAND_LINE = "<command line>"
+
+_INT, _FLOAT = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float"
+_PLAIN_TAGS = {
+    "tag:yaml.org,2002:str", "tag:yaml.org,2002:int", "tag:yaml.org,2002:float",
+    "tag:yaml.org,2002:bool", "tag:yaml.org,2002:null",
+}
+_SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+"""libyaml's safe loader when PyYAML was built with it (10x faster on large files), else PyYAML's."""
+
+
+def key_of(path: tuple[Any, ...]) -> str:
+    """The dotted key of ``path`` (empty for the whole file)."""
+    return ".".join(map(str, path))
+
+
+class Document:
+    """One file's plain data, converted from YAML nodes, with the line of every path."""
+
+    def __init__(self, file: str):
+        self.file = file
+        self.layer = 0
+        """Its place in a chain of files extending one another: 0 for the deepest base."""
+        self.lines: dict[tuple[Any, ...], int] = {}
+
+    @property
+    def folder(self) -> Path | None:
+        """The folder the file's relative paths start from (None for text without a file)."""
+        return None if self.file in ("<string>", COMMAND_LINE) else Path(self.file).parent
+
+    def line(self, path: tuple[Any, ...]) -> int | None:
+        """The line of ``path``, or of its deepest known parent."""
+        while path not in self.lines and path:
+            path = path[:-1]
+        return self.lines.get(path)
+
+    def error(self, message: str, path: tuple[Any, ...], cause: DGraphError | None = None) -> GraphFileError:
+        """A :class:`GraphFileError` located at ``path`` (naming the entity and signal of ``cause``)."""
+        return GraphFileError(message, file=self.file, line=self.line(path), key=key_of(path) or None,
+                              entity=cause.entity if cause else None, signal=cause.signal if cause else None)
+
+
+@dataclass(frozen=True)
+class At:
+    """Where a piece of the graph was written: a file and the path of its key."""
+
+    doc: Document
+    path: tuple[Any, ...]
+
+    def error(self, message: str, cause: DGraphError | None = None) -> GraphFileError:
+        """A :class:`GraphFileError` located here."""
+        return self.doc.error(message, self.path, cause)
+
+    def where(self) -> str:
+        """``file:line [key]``, for messages that point at a second place."""
+        line = self.doc.line(self.path)
+        return f"{self.doc.file}{f':{line}' if line else ''} [{key_of(self.path)}]"
+
+    def within(self, *keys: Any) -> At:
+        """The place of ``keys`` under this one."""
+        return At(self.doc, (*self.path, *keys))
+
+
+def latest(first: At, *others: At) -> At:
+    """The place written by the nearest file of the chain (``first`` on a tie)."""
+    return max((first, *others), key=lambda at: at.doc.layer)
+
+
+def _too_large(file: str) -> GraphFileError:
+    return GraphFileError(f"file larger than {MAX_BYTES} bytes", file=file)
+
+
+def read_text(path: str | Path) -> str:
+    """The text of a graph file (:class:`GraphFileError` if not a readable regular file of at
+    most ``MAX_BYTES``, or not UTF-8): a device such as ``/dev/zero`` is never read."""
+    path = Path(path)
+    try:
+        if path.exists() and not path.is_file():
+            raise GraphFileError("cannot read: not a regular file", file=str(path))
+        if path.stat().st_size > MAX_BYTES:
+            raise _too_large(str(path))
+        return path.read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise GraphFileError(f"cannot read: {exc.strerror or exc}", file=str(path)) from None
+    except UnicodeDecodeError as exc:
+        raise GraphFileError(f"not UTF-8 text: {exc.reason}", file=str(path)) from None
+
+
+def plain_data(text: str, file: str) -> tuple[Any, Document]:
+    """The plain data of one file's YAML text, and its line map."""
+    doc = Document(file)
+    if len(text) > MAX_BYTES:
+        raise _too_large(file)
+    loader = None
+    try:
+        loader = _SAFE_LOADER(text)
+        node = loader.get_single_node()
+        if node is None:
+            raise GraphFileError("the file is empty", file=file, line=1)
+        data = _convert(doc, node, (), set(), loader)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise GraphFileError(f"invalid YAML: {problem}", file=file,
+                             line=mark.line + 1 if mark else None) from None
+    except RecursionError:
+        raise GraphFileError("nesting too deep", file=file) from None
+    finally:
+        if loader is not None:
+            loader.dispose()
+    return data, doc
+
+
+def _node_error(doc: Document, message: str, node: yaml.Node, path: tuple[Any, ...]) -> GraphFileError:
+    """An error at the line of ``node`` itself (a key, or a scalar not yet in the line map)."""
+    return GraphFileError(message, file=doc.file, line=node.start_mark.line + 1, key=key_of(path) or None)
+
+
+def _convert(doc: Document, node: yaml.Node, path: tuple[Any, ...], seen: set[int],
+             loader: yaml.SafeLoader) -> Any:
+    if id(node) in seen:
+        raise doc.error("anchors and aliases are not allowed in graph files", path)
+    seen.add(id(node))
+    doc.lines[path] = node.start_mark.line + 1
+    if isinstance(node, yaml.MappingNode):
+        return _mapping(doc, node, path, seen, loader)
+    if isinstance(node, yaml.SequenceNode):
+        if node.tag != "tag:yaml.org,2002:seq":
+            raise doc.error(f"tag {node.tag!r} is not allowed", path)
+        return [_convert(doc, item, (*path, i), seen, loader) for i, item in enumerate(node.value)]
+    if node.tag not in _PLAIN_TAGS:
+        raise doc.error(f"tag {node.tag!r} is not allowed (only plain strings, numbers, booleans, null)", path)
+    return _scalar(doc, node, path, loader)
+
+
+def _mapping(doc: Document, node: yaml.MappingNode, path: tuple[Any, ...], seen: set[int],
+             loader: yaml.SafeLoader) -> dict[str, Any]:
+    if node.tag != "tag:yaml.org,2002:map":
+        raise doc.error(f"tag {node.tag!r} is not allowed", path)
+    out: dict[str, Any] = {}
+    for key_node, value_node in node.value:
+        if not isinstance(key_node, yaml.ScalarNode) or key_node.tag not in _PLAIN_TAGS:
+            raise _node_error(doc, "mapping keys must be plain scalars (no merge keys or tags)", key_node, path)
+        key = key_node.value  # the text as written: `off:` names 'off', not False
+        if key in out:
+            raise _node_error(doc, f"duplicate key {key!r}", key_node, (*path, key))
+        out[key] = _convert(doc, value_node, (*path, key), seen, loader)
+        doc.lines[(*path, key)] = key_node.start_mark.line + 1  # errors point at the key
+    return out
+
+
+def _shortened(text: str) -> str:
+    return f"{text[:24]}{'...' if len(text) > 24 else ''}"
+
+
+def _scalar(doc: Document, node: yaml.Node, path: tuple[Any, ...], loader: yaml.SafeLoader) -> Any:
+    """A plain scalar's value; an explicit tag on text that does not parse is a file error."""
+    if node.tag in (_INT, _FLOAT) and (":" in node.value or len(node.value) > MAX_NUMBER_CHARS):
+        # YAML 1.1 base-60 numbers (1:30) are refused, and so are absurdly long ones: PyYAML
+        # converts both in quadratic time
+        raise _node_error(doc, f"{_shortened(node.value)} is not a supported number", node, path)
+    try:
+        value = loader.construct_object(node)
+    except (ValueError, KeyError, IndexError, TypeError, OverflowError, yaml.YAMLError):
+        raise _node_error(doc, f"{node.value!r} is not a valid {node.tag.rsplit(':', 1)[-1]}", node, path) from None
+    too_large = (isinstance(value, float) and math.isinf(value) and node.value.lower().lstrip("+-") != ".inf") or (
+        isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 2**63)
+    if too_large:
+        raise _node_error(doc, f"number {_shortened(node.value)} is too large", node, path)
+    return value
