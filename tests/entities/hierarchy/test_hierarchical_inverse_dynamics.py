@@ -71,3 +71,8 @@ def test_there_is_no_passive_mode_to_ignore():
         HierarchicalInverseDynamics("hid", passive=True)
     solver = HierarchicalInverseDynamics("hid")
     assert not any(hasattr(solver, name) for name in ("passivity", "passivity_relaxed", "torque_limited"))
+
+
+def test_a_task_cannot_be_named_after_the_stack_input():
+    with pytest.raises(dg.ParamError, match="'stack' cannot name an input"):
+        HierarchicalInverseDynamics("hid", tasks=["stack"])
