@@ -11,10 +11,11 @@ from dgraph.control.solutions import CascadeSolution
 from dgraph.entities.hierarchy.stack import StackCommands
 from dgraph.entities.named_inputs import declare_named_inputs
 from dgraph.entities.robot.robot_state import load_model
+from dgraph.entities.solver_report import SolverReport
 
 
 @dg.register
-class HierarchicalSolver(StackCommands, dg.Entity):
+class HierarchicalSolver(StackCommands, SolverReport, dg.Entity):
     """Velocity-level inverse kinematics with strict priorities (thesis §4.2.1, Eq. 4.3–4.4;
     Saab et al., Eq. 2.59).
 
@@ -110,22 +111,6 @@ class HierarchicalSolver(StackCommands, dg.Entity):
         return self.solution(t).residuals
 
     @dg.output(shape=(), dtype="int", depends=("solution",))
-    def status(self, t: int) -> int:
-        """0 when solved; see the class docstring for the failure codes."""
-        return self.solution(t).status
-
-    @dg.output(shape=(), dtype="int", depends=("solution",))
-    def iterations(self, t: int) -> int:
-        """ProxQP iterations, summed over the levels."""
-        return self.solution(t).iterations
-
-    @dg.output(shape=(), dtype="int", depends=("solution",))
     def qp_levels(self, t: int) -> int:
         """How many levels needed ProxQP (the others were solved in closed form)."""
         return self.solution(t).qp_levels
-
-    @dg.output(shape=(), depends=("solution",))
-    def solve_time(self, t: int) -> float:
-        """Wall time of the cascade (s)."""
-        return self.solution(t).solve_time
-

@@ -12,9 +12,10 @@ from dgraph.control.equation import TaskEquation
 from dgraph.control.solutions import QPSolution
 from dgraph.entities.named_inputs import declare_named_inputs
 from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model, unactuated_dofs
+from dgraph.entities.solver_report import SolverReport
 
 
-class TorqueSolver(dg.Entity, abc.ABC):
+class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
     """Base of the entities that compute joint torques from task equations and contacts on the
     robot state, over the accelerations and the contact forces ``y = [a, f]``
     (:class:`~dgraph.entities.solvers.InverseDynamicsSolver`, weighted;
@@ -122,17 +123,3 @@ class TorqueSolver(dg.Entity, abc.ABC):
         """Sum of the contacts' world-z forces (N)."""
         return float(sum(self.contact_wrenches(t)[:, 2].tolist()))  # a few contacts: Python's sum is cheapest
 
-    @dg.output(shape=(), dtype="int", depends=("solution",))
-    def status(self, t: int) -> int:
-        """0 when solved; see the class docstring for the failure codes."""
-        return self.solution(t).status
-
-    @dg.output(shape=(), dtype="int", depends=("solution",))
-    def iterations(self, t: int) -> int:
-        """ProxQP iterations of the tick (summed over its solves)."""
-        return self.solution(t).iterations
-
-    @dg.output(shape=(), depends=("solution",))
-    def solve_time(self, t: int) -> float:
-        """Wall time of assembly and solve (s)."""
-        return self.solution(t).solve_time
