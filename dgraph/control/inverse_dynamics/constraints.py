@@ -35,13 +35,13 @@ class ContactRows:
     friction rows, and views of them (made once)."""
 
     def __init__(self, rows: ConstraintRows, contact: ContactConstraint, column: int, row: int, friction_row: int):
-        nv, n_base = rows.nv, rows.n_unactuated
+        nv, n_unactuated = rows.nv, rows.n_unactuated
         k, m = contact.n_forces, len(contact.motion_rhs)
         columns, motion = slice(column, column + k), slice(row, row + m)
         self.columns = columns
         self.generalized = np.zeros((nv, k))  # -J^T T: the columns of the contact's forces in the dynamics
-        self.base_part, self.joint_part = self.generalized[:n_base], self.generalized[n_base:]
-        self.dynamics = rows.A[:n_base, columns]
+        self.base_part, self.joint_part = self.generalized[:n_unactuated], self.generalized[n_unactuated:]
+        self.dynamics = rows.A[:n_unactuated, columns]
         self.torque = rows.torque_rows[:, columns]
         self.motion_matrix = rows.A[motion, :nv]
         self.motion_rhs = rows.b[motion]
@@ -139,10 +139,11 @@ class ConstraintRows:
     def write(self, mass_matrix: np.ndarray, bias_forces: np.ndarray, contacts: list[ContactConstraint]) -> bool:
         """The dynamics, torque and contact rows of this tick (the torque bounds apart:
         :meth:`write_torque_bounds`); True if a contact's constant rows were written again."""
-        n_base = self.n_unactuated
-        self.base_dynamics[...] = mass_matrix[:n_base]  # dynamics (base rows) and torque rows share [M, -J_c^T T]
-        np.negative(bias_forces[:n_base], out=self.base_rhs)
-        self.torque_acceleration[...] = mass_matrix[n_base:]
+        n_unactuated = self.n_unactuated
+        # the dynamics (floating-base rows) and the torque rows share [M, -J_c^T T]
+        self.base_dynamics[...] = mass_matrix[:n_unactuated]
+        np.negative(bias_forces[:n_unactuated], out=self.base_rhs)
+        self.torque_acceleration[...] = mass_matrix[n_unactuated:]
         rewritten = False
         for contact, rows in zip(contacts, self.contacts, strict=True):
             if rows.write(contact):

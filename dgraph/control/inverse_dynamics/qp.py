@@ -127,12 +127,14 @@ class Workspace:
     """
 
     def __init__(self, qp: InverseDynamicsQP, contacts: list[ContactConstraint], passivity_row: bool):
-        nv, n_base = qp.nv, qp.n_unactuated
+        nv, n_unactuated = qp.nv, qp.n_unactuated
         n = nv + sum(c.n_forces for c in contacts)
         cost = n * n + n
-        self.data = np.zeros(cost + ConstraintRows.size(nv, n_base, contacts, passivity_row))  # one finiteness check
+        size = cost + ConstraintRows.size(nv, n_unactuated, contacts, passivity_row)
+        self.data = np.zeros(size)  # one block: one finiteness check
         self.H, self.g = self.data[:n * n].reshape(n, n), self.data[n * n:cost]
-        self.rows = rows = ConstraintRows(nv, n_base, qp.effort_limit, contacts, passivity_row, memory=self.data[cost:])
+        self.rows = rows = ConstraintRows(nv, n_unactuated, qp.effort_limit, contacts, passivity_row,
+                                          memory=self.data[cost:])
         self.A, self.b, self.C, self.lower, self.upper = rows.A, rows.b, rows.C, rows.lower, rows.upper
         self.n, self.n_free, self.torque_rows = n, rows.n_free, rows.torque_rows
         self.chunks = [self.data[i:i + FINITE_CHUNK] for i in range(0, len(self.data), FINITE_CHUNK)]

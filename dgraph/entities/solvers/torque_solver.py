@@ -95,8 +95,8 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
 
     def fallback_torque(self, state: RobotState) -> np.ndarray:
         """``g_j(q) - d v_j``, clipped to the torque limits."""
-        n_base = self.n_unactuated
-        tau = state.gravity_torque()[n_base:] - self.fallback_damping * state.v[n_base:]
+        n_unactuated = self.n_unactuated
+        tau = state.gravity_torque()[n_unactuated:] - self.fallback_damping * state.v[n_unactuated:]
         return np.clip(tau, -self.effort_limit, self.effort_limit)
 
     @abc.abstractmethod
