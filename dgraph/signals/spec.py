@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from dgraph.errors import SpecError
+from dgraph.signals.value_types import VALUE_TYPES
 
 ShapeDecl = tuple[int | str | None, ...] | str | Callable[[Any], Any] | None
 """A declared shape: a tuple of ints (``None`` = any size, ``str`` = name of an entity
@@ -30,9 +31,10 @@ class Spec:
 
     ``shape`` is ``None`` (any shape) or a tuple whose entries are ints or ``None`` (any size
     along that axis). ``dtype`` is one of ``float``, ``int``, ``bool``, ``object`` (anything,
-    unchecked), or a class: a **structured** signal, whose values are instances of that class
-    (a task equation, a contact constraint, a robot state...) and which plugs only into an input
-    of the same class or a base class of it. ``labels`` optionally names the components of a
+    unchecked), or a class registered with :func:`~dgraph.signals.value_types.value_type`: a
+    **structured** signal, whose values are instances of that class (a task equation, a contact
+    constraint, a robot state...) and which plugs only into an input of the same class or a base
+    class of it. ``labels`` optionally names the components of a
     vector (used by recorders and plots).
     """
 
@@ -45,6 +47,9 @@ class Spec:
             raise SpecError(f"unknown dtype {dtype!r}; expected one of {DTYPES} or a class")
         if self.structured and shape is not None:
             raise SpecError(f"a structured signal ({dtype.__name__}) has no shape, got {shape!r}")
+        if self.structured and VALUE_TYPES.get(dtype.__name__) is not dtype:
+            raise SpecError(f"{dtype.__module__}.{dtype.__qualname__} is not a structured value type: "
+                            "register it with @dg.value_type to use it as a dtype")
         self.shape = None if shape is None else tuple(shape)
         self.dtype = dtype
         self.labels = tuple(labels) if labels is not None else None
@@ -72,14 +77,17 @@ class Spec:
     def accepts(self, source: Spec) -> bool:
         """True if a signal of spec ``source`` may feed an input of this spec: an ``object``
         input takes anything; a structured input takes a source of its class or a subclass of
-        it, nothing else (an untyped ``object`` source included: the core could not check it)."""
+        it; a numeric input a numeric source of its dtype (or an int or bool into a float) whose
+        shape fits. An untyped ``object`` source feeds only an ``object`` input: the core could
+        not check it."""
         if self.dtype == "object":
             return True
         if self.structured or source.structured:
             return self.structured and source.structured and issubclass(source.dtype, self.dtype)
-        if self.dtype != "object" and source.dtype != "object":
-            if self.dtype != source.dtype and not (self.dtype == "float" and source.dtype in ("int", "bool")):
-                return False
+        if source.dtype == "object":
+            return False
+        if self.dtype != source.dtype and not (self.dtype == "float" and source.dtype in ("int", "bool")):
+            return False
         if self.shape is None or source.shape is None:
             return True
         if len(self.shape) != len(source.shape):
@@ -98,14 +106,13 @@ class Spec:
         """Return ``value`` converted to this spec (a float, int, bool or a fresh array).
 
         Raises :class:`SpecError` naming ``where`` on a wrong shape, a wrong type or NaN. A
-        structured value is returned as it is, if it is an instance of the class.
+        structured value is returned as it is if it is an instance of the class; plain data (from
+        a graph file, ``--set``) is converted by the class's ``from_plain`` if it has one.
         """
         if self.dtype == "object":
             return value
         if self.structured:
-            if not isinstance(value, self.dtype):
-                raise SpecError(f"{where}: expected a {self.dtype.__name__}, got {_short(value)}")
-            return value
+            return self._coerce_structured(value, where)
         try:
             if self.shape == () or (self.shape is None and np.ndim(value) == 0):
                 return self._coerce_scalar(value, where)
@@ -122,6 +129,17 @@ class Spec:
         if self.dtype == "float" and has_nan(array):
             raise SpecError(f"{where}: value contains NaN: {_short(value)}")
         return array
+
+    def _coerce_structured(self, value: Any, where: str) -> Any:
+        if isinstance(value, self.dtype):
+            return value
+        from_plain = getattr(self.dtype, "from_plain", None)
+        if from_plain is not None:
+            try:
+                return from_plain(value)
+            except (TypeError, ValueError) as exc:
+                raise SpecError(f"{where}: cannot make a {self.dtype.__name__} of {_short(value)}: {exc}") from None
+        raise SpecError(f"{where}: expected a {self.dtype.__name__}, got {_short(value)}")
 
     def _coerce_scalar(self, value: Any, where: str) -> Any:
         if np.ndim(value) != 0:

@@ -1,7 +1,10 @@
 """Structured value types: the classes that structured signals carry between entities.
 
-A class decorated with :func:`value_type` can be a port's ``dtype``: plugging then checks that
-the output's class is the input's class or a subclass of it (see :meth:`Spec.accepts`). The
+A class decorated with :func:`value_type` can be a port's ``dtype`` (no other class can):
+plugging then checks that the output's class is the input's class or a subclass of it (see
+:meth:`Spec.accepts`). A class that can be written in a graph file (a priority stack, later a
+footstep plan) defines a class method ``from_plain(value)`` that builds it from plain data
+(lists, numbers, strings), raising ``TypeError`` or ``ValueError`` on what it cannot take. The
 registry lets tools list the vocabulary of a graph (``dgraph check``, the tests that try every
 pair of types) without building any entity. The core knows the classes only by this registry:
 they are defined next to the entities that make them.

@@ -178,13 +178,13 @@ def test_a_solver_reads_one_output_per_task_and_the_others_follow_from_it():
     task.kp.set(np.array([10.0, 20.0, 30.0]))
     task.kd.set(5.0)
     equation = task.equation(0)
-    assert task.gains.count == 0 and task.desired_acceleration.count == 0  # only the equation was computed
-    kp, kd = task.gains(0)
+    assert task.proportional_gains.count == task.derivative_gains.count == task.desired_acceleration.count == 0
+    kp, kd = task.proportional_gains(0), task.derivative_gains(0)  # only the equation was computed, above
     assert kp is equation.kp and kd is equation.kd and np.array_equal(kd, [5.0] * 3)
     np.testing.assert_array_equal(task.desired_acceleration(0), equation.vector + equation.feature.drift)
     assert task.equation(1) is equation  # nothing it depends on changed
     task.kd.set(6.0)
-    assert task.gains(1)[1][0] == 6.0 and task.equation(1) is not equation
+    assert task.derivative_gains(1)[0] == 6.0 and task.equation(1) is not equation
 
 
 def test_constant_gains_are_converted_once_and_again_when_set():

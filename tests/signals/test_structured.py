@@ -18,8 +18,8 @@ from dgraph.signals.value_types import VALUE_TYPES, value_type
 
 ENTITY_TYPES = entity_types()  # imports every family, which registers its value types
 
-PACKAGE_TYPES = ("RobotState", "FeatureValue", "TaskEquation", "ContactConstraint", "RowBlock",
-                 "QPSolution", "Passivity", "CascadeSolution", "EnergyBudget", "Estimate")
+PACKAGE_TYPES = ("PriorityStack", "NextState", "RobotState", "FeatureValue", "TaskEquation", "ContactConstraint",
+                 "RowBlock", "QPSolution", "Passivity", "CascadeSolution", "EnergyBudget", "Estimate")
 
 
 def typed_pair(source_type: type | str, target_type: type | str) -> tuple[dg.Entity, dg.Entity]:
@@ -75,19 +75,44 @@ def test_an_untyped_source_cannot_feed_a_structured_input_but_an_untyped_input_t
 
 
 def test_a_subclass_plugs_into_its_base_and_not_the_other_way():
+    @value_type
     @dataclass
     class Base:
         x: float
 
+    @value_type
     @dataclass
     class Derived(Base):
         y: float
 
-    producer, consumer = typed_pair(Derived, Base)
-    dg.plug(producer.out, consumer.inp)
-    producer, consumer = typed_pair(Base, Derived)
-    with pytest.raises(dg.PlugError):
+    try:
+        producer, consumer = typed_pair(Derived, Base)
         dg.plug(producer.out, consumer.inp)
+        producer, consumer = typed_pair(Base, Derived)
+        with pytest.raises(dg.PlugError):
+            dg.plug(producer.out, consumer.inp)
+    finally:
+        del VALUE_TYPES["Base"], VALUE_TYPES["Derived"]
+
+
+@pytest.mark.parametrize("cls", [tuple, dict, list, np.ndarray])
+def test_only_a_registered_value_type_can_be_a_dtype(cls):
+    """A builtin container as a dtype would let any tuple (a pair of gains) into any tuple input
+    (a priority stack): the class must be registered, so that it says what it carries."""
+    with pytest.raises(dg.SpecError, match=f"{cls.__qualname__} is not a structured value type"):
+        Spec(dtype=cls)
+
+
+def test_plain_data_from_a_file_becomes_the_value_type_that_says_how():
+    stack_type = VALUE_TYPES["PriorityStack"]
+    spec = Spec(dtype=stack_type)
+    stack = spec.coerce([["contacts"], ["com", "waist"]], "solver.stack")
+    assert type(stack) is stack_type and stack == (("contacts",), ("com", "waist"))
+    for bad in ("com", ["com"], [[1]], 3.0):
+        with pytest.raises(dg.SpecError, match="solver.stack: cannot make a PriorityStack of"):
+            spec.coerce(bad, "solver.stack")
+    with pytest.raises(dg.SpecError, match="expected a Passivity, got"):
+        Spec(dtype=VALUE_TYPES["Passivity"]).coerce([1.0], "solver.passivity")  # no from_plain: no conversion
 
 
 def test_a_set_value_and_a_computed_value_are_checked_against_the_class():
@@ -116,3 +141,10 @@ def test_no_port_of_the_package_is_declared_untyped():
                for name, port in cls._port_templates.items()
                if port._dtype == "object" and not isinstance(port, dg.State)]
     assert untyped == []
+
+
+def test_an_untyped_source_feeds_only_an_untyped_input():
+    for target in ("float", "int", "bool"):
+        producer, consumer = typed_pair("object", target)
+        with pytest.raises(dg.PlugError, match=f"producer.out objectany into consumer.inp {target}"):
+            dg.plug(producer.out, consumer.inp)

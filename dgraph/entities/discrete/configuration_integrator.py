@@ -3,20 +3,30 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
 import dgraph as dg
+from dgraph.signals.value_types import value_type
 
 Integrate = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
+@value_type
+class NextState(NamedTuple):
+    """The configuration and velocity one tick later."""
+
+    q: np.ndarray
+    v: np.ndarray
+
+
 def integration_step(integrate: Integrate, q: np.ndarray, v: np.ndarray, u: np.ndarray, dt: float,
-                     mode: str) -> tuple[np.ndarray, np.ndarray]:
+                     mode: str) -> NextState:
     """One tick: ``(q ⊕ dt v_next, v_next)`` with ``v_next = u`` (``mode`` ``velocity``) or
     ``v + dt u`` (``acceleration``, semi-implicit Euler); ``⊕`` is ``integrate(q, dq)``."""
     v_next = u if mode == "velocity" else v + dt * u
-    return integrate(q, dt * v_next), v_next
+    return NextState(integrate(q, dt * v_next), v_next)
 
 
 @dg.register
@@ -94,8 +104,8 @@ class ConfigurationIntegrator(dg.Entity):
         """The velocity the QP uses at ``t``."""
         return self.measured_v(t) if self._synchronising(t) else self.integrated_v(t)
 
-    @dg.output(dtype=tuple, depends=("q", "v", "command"))
-    def next_state(self, t: int) -> tuple[np.ndarray, np.ndarray]:
+    @dg.output(dtype=NextState, depends=("q", "v", "command"))
+    def next_state(self, t: int) -> NextState:
         """``(q⁺, v⁺)``: one tick of integration of ``command(t)``."""
         return integration_step(self._integrate, self.q(t), self.v(t), self.command(t), self.dt,
                                 self.control_mode)
@@ -103,22 +113,22 @@ class ConfigurationIntegrator(dg.Entity):
     @dg.output(shape=("nq",), depends=("next_state",))
     def next_q(self, t: int) -> np.ndarray:
         """``q⁺``."""
-        return self.next_state(t)[0]
+        return self.next_state(t).q
 
     @dg.output(shape=("nv",), depends=("next_state",))
     def next_v(self, t: int) -> np.ndarray:
         """``v⁺``."""
-        return self.next_state(t)[1]
+        return self.next_state(t).v
 
     @dg.output(shape=("nqa",), depends=("next_state",))
     def joint_position(self, t: int) -> np.ndarray:
         """Actuated part of ``q⁺``: the joint position command."""
-        return self.next_state(t)[0][self._base_q:]
+        return self.next_state(t).q[self._base_q:]
 
     @dg.output(shape=("na",), depends=("next_state",))
     def joint_velocity(self, t: int) -> np.ndarray:
         """Actuated part of ``v⁺``: the joint velocity reference."""
-        return self.next_state(t)[1][self._base_v:]
+        return self.next_state(t).v[self._base_v:]
 
     def prepare_state(self, t: int) -> None:
         """Stage ``q⁺``, ``v⁺``."""

@@ -132,8 +132,8 @@ class EnergyTank(dg.Entity):
     solution = dg.Input(dtype=QPSolution, doc="the solver's solution (tau, contacts, forces), read after the solve")
     energy = dg.State(shape=(), doc="tank energy E = s^2 / 2 (J)")
     correction = dg.State(shape=(), initial=0.0, doc="energy added by the clamp so far (J)")
-    previous_stiffness = dg.State(dtype=dict, doc="Lambda K_P of the previous tick, per task (or stack)")
-    contact_frame_wrenches = dg.State(dtype=dict, doc="wrenches T_k f_k of the previous solution (contact frame), "
+    previous_stiffness = dg.State(dtype="object", doc="Lambda K_P of the previous tick, per task (or stack)")
+    contact_frame_wrenches = dg.State(dtype="object", doc="wrenches T_k f_k of the previous solution (contact frame), "
                                                        "by contact name")
 
     def configure(self) -> None:

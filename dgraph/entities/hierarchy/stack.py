@@ -6,36 +6,56 @@ from collections.abc import Sequence
 from typing import Any
 
 import dgraph as dg
-
-Stack = tuple[tuple[str, ...], ...]
-"""Levels, highest priority first; each level is a tuple of task names."""
+from dgraph.signals.value_types import value_type
 
 
-def initial_stack(tasks: Sequence[str], priorities: Sequence[int]) -> Stack:
+@value_type
+class PriorityStack(tuple):
+    """The levels of a priority stack, highest priority first; each level is a tuple of task
+    names (which tasks exist is checked by the solver that reads it, :meth:`StackCommands.read_stack`)."""
+
+    __slots__ = ()
+
+    def __new__(cls, levels: Any = ()) -> PriorityStack:
+        """Levels from any iterable of iterables of names (a graph file's lists, tuples)."""
+        stack = super().__new__(cls, (tuple(level) for level in levels))
+        if not all(isinstance(task, str) for level in stack for task in level):
+            raise TypeError("every level must be a list of task names")
+        return stack
+
+    @classmethod
+    def from_plain(cls, value: Any) -> PriorityStack:
+        """The stack a graph file or ``--set`` writes: a list of levels, each a list of names."""
+        if isinstance(value, str) or any(isinstance(level, str) for level in value):
+            raise TypeError("expected a list of levels, each a list of task names")
+        return cls(value)
+
+
+def initial_stack(tasks: Sequence[str], priorities: Sequence[int]) -> PriorityStack:
     """Levels from one priority per task (0 highest; equal priorities share a level; gaps are
     closed). Without priorities, each task is its own level, in order."""
     priorities = list(priorities) if priorities else list(range(len(tasks)))
     order = sorted(set(priorities))
-    return tuple(tuple(t for t, p in zip(tasks, priorities, strict=True) if p == level) for level in order)
+    return PriorityStack(tuple(t for t, p in zip(tasks, priorities, strict=True) if p == level) for level in order)
 
 
-def _without(stack: Stack, task: str) -> Stack:
+def _without(stack: PriorityStack, task: str) -> PriorityStack:
     """``stack`` with ``task`` taken out (an emptied level disappears)."""
-    return tuple(kept for level in stack if (kept := tuple(t for t in level if t != task)))
+    return PriorityStack(kept for level in stack if (kept := tuple(t for t in level if t != task)))
 
 
-def _level_of(stack: Stack, task: str) -> int:
+def _level_of(stack: PriorityStack, task: str) -> int:
     return next(i for i, level in enumerate(stack) if task in level)
 
 
-def pushed(stack: Stack, task: str, level: int | None = None) -> Stack:
+def pushed(stack: PriorityStack, task: str, level: int | None = None) -> PriorityStack:
     """``task`` added as a new lowest level, or into the existing ``level``."""
     if level is None or level == len(stack):
-        return (*stack, (task,))
-    return tuple((*lv, task) if i == level else lv for i, lv in enumerate(stack))
+        return PriorityStack((*stack, (task,)))
+    return PriorityStack((*lv, task) if i == level else lv for i, lv in enumerate(stack))
 
 
-def moved(stack: Stack, task: str, direction: int) -> Stack:
+def moved(stack: PriorityStack, task: str, direction: int) -> PriorityStack:
     """``task`` one priority up (``direction = -1``) or down (``+1``): alone on its level, that
     level swaps with its neighbour; sharing a level, the task leaves it for a new level of its
     own just above (below) it. At the top (bottom) of the stack nothing changes."""
@@ -46,12 +66,12 @@ def moved(stack: Stack, task: str, direction: int) -> Stack:
         levels.insert(index if direction < 0 else index + 1, (task,))
     elif 0 <= index + direction < len(levels):
         levels[index], levels[index + direction] = levels[index + direction], levels[index]
-    return tuple(levels)
+    return PriorityStack(levels)
 
 
 class StackCommands:
     """Mixin for a solver entity with a ``tasks`` parameter (its task inputs) and a ``stack``
-    input (a :data:`Stack`, declared by :meth:`declare_stack`): the commands edit the stack
+    input (a :class:`PriorityStack`, declared by :meth:`declare_stack`): the commands edit the stack
     between ticks, the solver reads it each tick (a change makes the solution recompute).
 
     Commands: ``push(task, level=None)`` (a new lowest level, or into level ``level``),
@@ -67,7 +87,7 @@ class StackCommands:
         if any(p < 0 for p in priorities):
             raise dg.ParamError(f"{self.name}: priorities must be >= 0", entity=self.name)
         self._checked_stack: Any = None
-        self.declare("stack", dg.Input(dtype=tuple, default=initial_stack(self.tasks, priorities),
+        self.declare("stack", dg.Input(dtype=PriorityStack, default=initial_stack(self.tasks, priorities),
                                        doc="priority levels, highest first (tuples of task names)"))
 
     def _known(self, task: str) -> str:
@@ -110,7 +130,7 @@ class StackCommands:
     @dg.command
     def clear(self) -> None:
         """Empty the stack."""
-        self.stack.set(())
+        self.stack.set(PriorityStack())
 
     @dg.command
     def levels(self) -> list[list[str]]:
@@ -121,7 +141,7 @@ class StackCommands:
         if not self._in_stack(task):
             raise dg.ParamError(f"{self.name}: task {task!r} is not in the stack", entity=self.name)
 
-    def read_stack(self, t: int) -> Stack:
+    def read_stack(self, t: int) -> PriorityStack:
         """``stack(t)``, checked: known task names, each at most once (``SpecError`` otherwise)."""
         raw: Any = self.stack(t)
         if raw is self._checked_stack:

@@ -29,7 +29,8 @@ class Task(dg.Entity):
     Inputs: ``feature`` (a feature's ``feature`` output), ``kp``, ``kd`` (scalar or one gain
     per row, >= 0), ``weight`` (scalar or per row, >= 0; default 1).
     Outputs: ``equation`` (:class:`TaskEquation`, plugged into a solver),
-    ``desired_acceleration`` (``x_ddot_des``), ``gains`` (``(Kp, Kd)`` vectors).
+    ``desired_acceleration`` (``x_ddot_des``), ``proportional_gains`` and ``derivative_gains``
+    (``Kp``, ``Kd`` as vectors of the feature's size).
     """
 
     critical_damping = dg.Param(False, kind="bool", doc="use Kd = 2 sqrt(Kp) instead of a kd input")
@@ -65,11 +66,15 @@ class Task(dg.Entity):
         weight = gains.vector("weight", size, t)
         return TaskEquation(f.jacobian, pd_law(f, kp, kd) - f.drift, weight, f, kp, kd)
 
-    @dg.output(dtype=tuple, depends=("equation",))
-    def gains(self, t: int) -> tuple[np.ndarray, np.ndarray]:
-        """``(Kp, Kd)`` as vectors of the feature's size."""
-        equation = self.equation(t)
-        return equation.kp, equation.kd
+    @dg.output(shape=None, depends=("equation",))
+    def proportional_gains(self, t: int) -> np.ndarray:
+        """``Kp``, one gain per row of the feature (for plots; computed only when read)."""
+        return self.equation(t).kp
+
+    @dg.output(shape=None, depends=("equation",))
+    def derivative_gains(self, t: int) -> np.ndarray:
+        """``Kd``, one gain per row (``2 sqrt(Kp)`` with critical damping)."""
+        return self.equation(t).kd
 
     @dg.output(shape=None, depends=("equation",))
     def desired_acceleration(self, t: int) -> np.ndarray:

@@ -104,3 +104,17 @@ def test_a_stack_set_by_hand_is_checked_at_the_tick(graph):
     with pytest.raises(dg.SpecError, match=r"solver\.stack at tick 0: .*'nope'") as info:
         graph.run(ticks=1)
     assert (info.value.entity, info.value.signal) == ("solver", "stack")
+
+
+def test_an_edited_stack_is_saved_and_loaded_back_as_a_stack():
+    from dgraph.files import dumps, loads
+
+    g = dg.Graph(dt=0.01, name="saved_stack")
+    solver = g.add(HierarchicalSolver("solver", model="talos", tasks=["a", "b", "c"]))
+    solver.down("a")
+    saved = dumps(g)
+    assert "solver.stack:\n  - [b]\n  - [a]\n  - [c]\n" in saved
+    again = loads(saved)
+    assert again["solver"].levels() == [["b"], ["a"], ["c"]] and dumps(again) == saved
+    with pytest.raises(dg.GraphFileError, match=r"solver\.stack: cannot make a PriorityStack of 'b'"):
+        loads(saved.replace("solver.stack:\n  - [b]\n  - [a]\n  - [c]", "solver.stack: b"))
