@@ -398,6 +398,16 @@ def test_an_entity_of_the_base_is_replaced_in_its_place_with_its_plugs_settings_
     assert g["k.gain"].value == 2.0 and "k.output" in g["recorder"].signals
 
 
+def test_a_redefinition_gives_its_parameters_over_the_settings_of_the_files_below(tmp_path):
+    write(tmp_path, "base.yaml", "entities:\n  c: {type: Constant, params: {value: [1.0]}}\n"
+                                 "  k: {type: Gain, params: {size: 1}}\nset:\n  c.value: [2.0]\n  k.gain: 3.0\n")
+    top = write(tmp_path, "top.yaml", "extends: base.yaml\nentities:\n  c: {type: Constant, params: {value: [5.0]}}\n"
+                                      "  k: {type: Gain, params: {size: 1}}\n")
+    g = dg.load(top)
+    assert g["c"].given_params["value"] == [5.0] and g["c"].output(0).tolist() == [5.0]
+    assert g["k.gain"].value == 3.0  # an input's constant is not a parameter of the definition: it stays
+
+
 def test_removing_an_entity_removes_its_plugs_settings_and_records(tmp_path):
     g = dg.load(scenario(tmp_path, "remove:\n  entities: [k]\n"))
     assert "k" not in g.entities and all("k." not in f"{a} {b}" for a, b in g.plugs())

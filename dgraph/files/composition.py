@@ -124,7 +124,7 @@ class Composition:
                 self.scalars[key] = (data[key], At(doc, (key,)))
         self._remove(data.get("remove", {}), doc)
         for name, spec in data.get("entities", {}).items():
-            self.entities[name] = EntitySpec(spec["type"], dict(spec.get("params") or {}), At(doc, ("entities", name)))
+            self._define(name, spec, At(doc, ("entities", name)))
         for section in ("set", "overrides"):
             for key, value in data.get(section, {}).items():
                 self._take(key, At(doc, (section, key)))
@@ -137,6 +137,13 @@ class Composition:
             if key in self.records:
                 raise At(doc, ("record", i)).error(f"{key} is already recorded ({self.records[key].where()})")
             self.records[key] = At(doc, ("record", i))
+
+    def _define(self, name: str, spec: dict[str, Any], at: At) -> None:
+        """Add or replace entity ``name``: the parameters its definition gives win over what the
+        files below set on them (the nearest file decides); their other settings stay."""
+        self.entities[name] = EntitySpec(spec["type"], dict(spec.get("params") or {}), at)
+        for param in self.entities[name].params:
+            self.sets.pop(f"{name}.{param}", None)
 
     def _take(self, key: str, at: At) -> None:
         """Forget what the files below plugged into or set on ``key``: ``at`` replaces it. One
