@@ -398,6 +398,17 @@ def test_an_entity_of_the_base_is_replaced_in_its_place_with_its_plugs_settings_
     assert g["k.gain"].value == 2.0 and "k.output" in g["recorder"].signals
 
 
+def test_a_chain_holds_at_most_max_extends_files(tmp_path):
+    from dgraph.files import MAX_EXTENDS
+
+    write(tmp_path, "f0.yaml", "entities:\n  k: {type: Gain, params: {size: 1}}\n")
+    for i in range(1, MAX_EXTENDS + 1):
+        write(tmp_path, f"f{i}.yaml", f"extends: f{i - 1}.yaml\nname: f{i}\n")
+    assert dg.load(tmp_path / f"f{MAX_EXTENDS - 1}.yaml").name == f"f{MAX_EXTENDS - 1}"  # 8 files
+    with pytest.raises(dg.GraphFileError, match=f"f1.yaml:1 \\[extends\\]: a chain of more than {MAX_EXTENDS} files"):
+        dg.load(tmp_path / f"f{MAX_EXTENDS}.yaml")  # 9 files
+
+
 def test_a_redefinition_gives_its_parameters_over_the_settings_of_the_files_below(tmp_path):
     write(tmp_path, "base.yaml", "entities:\n  c: {type: Constant, params: {value: [1.0]}}\n"
                                  "  k: {type: Gain, params: {size: 1}}\nset:\n  c.value: [2.0]\n  k.gain: 3.0\n")

@@ -75,8 +75,8 @@ def _base_file(extends: str, doc: Document, seen: set[Path]) -> Path:
         raise doc.error(f"can only extend a .yaml graph file, not {extends!r}", ("extends",))
     if base.resolve() in seen:
         raise doc.error(f"{extends!r} extends, directly or not, this file (a cycle)", ("extends",))
-    if len(seen) > MAX_EXTENDS:
-        raise doc.error(f"more than {MAX_EXTENDS} files extend one another", ("extends",))
+    if len(seen) >= MAX_EXTENDS:  # seen: this file and those it extends so far
+        raise doc.error(f"a chain of more than {MAX_EXTENDS} files extending one another", ("extends",))
     seen.add(base.resolve())
     return base
 
