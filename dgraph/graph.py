@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Iterable, Iterator
+from collections.abc import Collection, Iterable, Iterator
 from typing import Any
 
 import networkx as nx
@@ -219,13 +219,15 @@ class Graph:
                         g.add_edge(dep.full_name, sig.full_name, kind="dep")
         return g
 
-    def problems(self) -> list[str]:
-        """Everything :meth:`validate` would complain about, one line each."""
+    def problems(self, reported: Collection[str] = ()) -> list[str]:
+        """Everything :meth:`validate` would complain about, one line each; ``reported``: full
+        names of inputs whose missing source was already reported (a plug the loader refused)."""
         found: list[str] = []
         for entity in self:
             for inp in entity.inputs.values():
                 if inp.source is None and not inp.is_set and not inp.has_default:
-                    found.append(f"input {inp.full_name} is not plugged, not set and has no default")
+                    if inp.full_name not in reported:
+                        found.append(f"input {inp.full_name} is not plugged, not set and has no default")
                 elif inp.source is not None and not inp.spec.accepts(inp.source.spec):
                     found.append(f"{inp.source.full_name} {inp.source.spec!r} does not fit "
                                  f"{inp.full_name} {inp.spec!r}")

@@ -55,8 +55,7 @@ def check(path: str | Path) -> tuple[Graph, list[str]]:
     refused: Refused = []
     file = str(path)
     graph = _build(compose(read_text(path), file), file, refused)
-    unplugged = {f"input {target} is not plugged, not set and has no default" for target, _ in refused}
-    return graph, [str(error) for _, error in refused] + [p for p in graph.problems() if p not in unplugged]
+    return graph, [str(error) for _, error in refused] + graph.problems(reported={target for target, _ in refused})
 
 
 def _build(composition: Composition, file: str, refused: Refused | None = None) -> Graph:
