@@ -96,7 +96,7 @@ def run(name: str, scenario: str, out: Path) -> tuple[dict[str, np.ndarray], lis
     """Run one graph on ``scenario`` with the probes; its recording (the reference as
     ``reference`` and ``reference_acceleration``), control tick durations and wall time."""
     path = ROOT / "graphs" / f"{name}.yaml"
-    entities = declared_entities(parse(read_text(path), str(path))[0])  # with the files it extends
+    entities = declared_entities(parse(read_text(path), str(path)))  # with the files it extends
     overrides = {f"{e}.rerun": "off" for e in ("recorder", "view") if e in entities or e == "recorder"}
     graph = dg.load(str(path), overrides)
     if scenario == "transfer":

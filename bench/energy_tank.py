@@ -44,7 +44,7 @@ def timed_graph(passive: bool) -> dg.Graph:
     """The pushing graph, passive (tank) or plain (no tank entity, no passivity input), without
     recording."""
     path = GRAPHS / "talos_push_tank.yaml"
-    data, _ = parse(path.read_text(), str(path))
+    data = parse(path.read_text(), str(path))
     del data["entities"]["view"], data["record"]
     data["plugs"] = [p for p in data["plugs"] if not p.strip().startswith("device.q ->")]
     if not passive:

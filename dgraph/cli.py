@@ -35,7 +35,7 @@ def _parse_sets(items: list[str]) -> dict[str, Any]:
         key, eq, text = item.partition("=")
         if not eq or key.count(".") != 1:
             raise GraphFileError(f"--set {item!r}: expected entity.name=value", file="<command line>")
-        data, _ = parse(f"entities: {{}}\nset: {{x.v: {text}}}", "<command line>") if text else ({}, None)
+        data = parse(f"entities: {{}}\nset: {{x.v: {text}}}", "<command line>") if text else {}
         if not data:
             raise GraphFileError(f"--set {item!r}: missing value", file="<command line>")
         out[key.strip()] = data["set"]["x.v"]
@@ -47,7 +47,7 @@ def _recorder_names(path: str, types: tuple[str, ...] = ("Recorder",)) -> tuple[
     from dgraph.entities.recording.rerun_stream import safe_file_stem
     from dgraph.files import declared_entities, parse, read_text
 
-    data, _ = parse(read_text(path), path)
+    data = parse(read_text(path), path)
     names = [n for n, spec in declared_entities(data).items() if spec["type"] in types]
     return names, safe_file_stem(data.get("name", Path(path).stem))
 

@@ -487,7 +487,7 @@ def test_path_parameters_are_taken_from_the_file_that_wrote_them(tmp_path):
                                           " interpolation: linear}}\n")
     top = write(tmp_path, "top.yaml", "extends: base/traj.yaml\n")
     assert dg.load(top)["traj"].position(1000)[0] == 2.0
-    data, _ = dg.files.parse(top.read_text(), str(top))
+    data = dg.files.parse(top.read_text(), str(top))
     assert data["entities"]["traj"]["params"]["path"] == os.path.join("base", "data.csv")
     top.write_text("extends: base/traj.yaml\nset: {traj.path: other.csv}\n")
     assert dg.load(top)["traj"].position(1000)[0] == 4.0
@@ -495,7 +495,7 @@ def test_path_parameters_are_taken_from_the_file_that_wrote_them(tmp_path):
 
 def test_parse_gives_the_composed_graph_as_one_file(tmp_path):
     path = scenario(tmp_path, "name: s\nremove: {entities: [ref]}\nset: {dev.q0: [1.0, 1.0], err.in0: [0.0, 0.0]}\n")
-    data, _ = dg.files.parse(path.read_text(), str(path))
+    data = dg.files.parse(path.read_text(), str(path))
     assert data["name"] == "s" and list(data["entities"]) == ["dev", "err", "k"]
     assert data["entities"]["dev"]["params"] == {"size": 2, "q0": [1.0, 1.0]}
     assert data["set"] == {"k.gain": 2.0, "err.in0": [0.0, 0.0]} and "ref.output -> err.in0" not in data["plugs"]

@@ -251,16 +251,16 @@ def _flat_entity(spec: EntitySpec, settings: dict[str, Setting], folder: Path | 
     return out
 
 
-def parse(text: str, file: str = "<string>") -> tuple[dict[str, Any], Document]:
+def parse(text: str, file: str = "<string>") -> dict[str, Any]:
     """The graph that graph-file text describes, as the plain data of one file without
     ``extends`` (the files it extends composed, parameters given by ``set`` folded into their
-    entities, ``path`` parameters relative to the file's folder), and the file's line map.
+    entities, ``path`` parameters relative to the file's folder). Its pieces come from several
+    files, so it has no line map: errors found later are located by :func:`~dgraph.files.loads`.
 
     The YAML, the schema and what ``remove`` names are checked here; types, parameters and
     signals when the graph is built (:func:`~dgraph.files.loads`).
     """
-    composition = compose(text, file)
-    return composition.flat(), composition.top
+    return compose(text, file).flat()
 
 
 def declared_entities(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
