@@ -85,19 +85,18 @@ def _rerun_mode(option: list[str], stem: str) -> tuple[str, str | None]:
                          file="<command line>")
 
 
-def _serve_address(args: argparse.Namespace) -> None:
-    """``--rerun-bind``: the address ``serve`` sinks listen on (loopback unless given)."""
-    if args.rerun_bind is not None:
-        from dgraph.entities.recording.rerun_stream import set_serve_address
-
-        set_serve_address(args.rerun_bind)
-
-
 def cmd_run(args: argparse.Namespace) -> int:
-    """Load, validate and run a graph file, then report what was written."""
+    """Load, validate and run a graph file, then report what was written; ``--rerun-bind`` is
+    where ``serve`` sinks listen during this run (loopback unless given)."""
+    from dgraph.entities.recording.rerun_stream import serving_on
+
+    with serving_on(args.rerun_bind):
+        return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
     import dgraph
 
-    _serve_address(args)
     overrides = {**_recorder_overrides(args.file, args), **_parse_sets(args.set)}
     graph = dgraph.load(args.file, overrides)
     graph.validate()

@@ -165,7 +165,7 @@ def test_rerun_bind_chooses_where_serve_listens(monkeypatch, capsys):
         grpc, web = a.getsockname()[1], b.getsockname()[1]
     monkeypatch.setattr(rerun_stream, "SERVE", rerun_stream.ServeAddress(grpc_port=grpc, web_port=web))
     assert main(["run", PD, "--ticks", "5", "--rerun", "serve", "--rerun-bind", "127.0.0.2", "-q"]) == 0
-    assert rerun_stream.SERVE == rerun_stream.ServeAddress("127.0.0.2", grpc, web)
+    assert rerun_stream.SERVE == rerun_stream.ServeAddress(grpc_port=grpc, web_port=web)  # for this run only
     assert f"rerun: web viewer at http://127.0.0.2:{web}/?url=rerun%2Bhttp%3A%2F%2F127.0.0.2%3A{grpc}" \
            in capsys.readouterr().err
     assert listening(grpc) == set() and listening(web) == set()  # the run is over: so is the server

@@ -15,6 +15,7 @@ one recording; the last user's :meth:`RerunStream.close` flushes and closes the 
 
 from __future__ import annotations
 
+import contextlib
 import ipaddress
 import os
 import re
@@ -24,6 +25,7 @@ import sys
 import tempfile
 import time
 import weakref
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -69,6 +71,18 @@ def set_serve_address(bind: str, grpc_port: int | None = None, web_port: int | N
     SERVE = ServeAddress(bind, SERVE.grpc_port if grpc_port is None else grpc_port,
                          SERVE.web_port if web_port is None else web_port)
     return SERVE
+
+
+@contextlib.contextmanager
+def serving_on(bind: str | None) -> Iterator[ServeAddress]:
+    """Within the block, ``serve`` sinks listen on ``bind`` (``None``: where they would); the
+    address is restored after it, so one run's ``--rerun-bind`` does not widen the next one's."""
+    global SERVE
+    before = SERVE
+    try:
+        yield SERVE if bind is None else set_serve_address(bind)
+    finally:
+        SERVE = before
 
 
 class RerunServer:
