@@ -142,18 +142,13 @@ class StackCommands:
             raise dg.ParamError(f"{self.name}: task {task!r} is not in the stack", entity=self.name)
 
     def read_stack(self, t: int) -> PriorityStack:
-        """``stack(t)``, checked: known task names, each at most once (``SpecError`` otherwise)."""
-        raw: Any = self.stack(t)
-        if raw is self._checked_stack:
-            return raw
-        try:
-            stack = tuple(tuple(level) for level in raw)
+        """``stack(t)`` (a :class:`PriorityStack`: the input's type), checked once per value:
+        known task names, each at most once (``SpecError`` otherwise)."""
+        stack = self.stack(t)
+        if stack is not self._checked_stack:
             names = [task for level in stack for task in level]
-        except TypeError:
-            names = None
-        if names is None or len(set(names)) != len(names) or not set(names) <= set(self.tasks):
-            raise dg.SpecError(f"{self.name}.stack at tick {t}: expected levels of distinct task names among "
-                               f"{list(self.tasks)}, got {raw!r}", entity=self.name, signal="stack")
-        if stack == raw:
-            self._checked_stack = raw  # checked once per value
+            if len(set(names)) != len(names) or not set(names) <= set(self.tasks):
+                raise dg.SpecError(f"{self.name}.stack at tick {t}: expected levels of distinct task names among "
+                                   f"{list(self.tasks)}, got {stack!r}", entity=self.name, signal="stack")
+            self._checked_stack = stack
         return stack
