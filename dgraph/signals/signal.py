@@ -112,9 +112,10 @@ class Output(Signal):
     read; a stale one whose stamp is later than the tick read raises
     :class:`~dgraph.errors.DGraphError` naming it, the tick read and its stamp (something it
     depends on changed since: the graph keeps no history to compute its past value from), and
-    nothing is computed. The exception is an output declaring ``"t"`` (time-varying): it is a function of
-    the tick, evaluated at the tick read (a reference is sampled anywhere on its horizon, as
-    ``MinimumJerk`` is written to answer). The check costs one integer comparison on the stale
+    nothing is computed. The exception is an output declaring ``"t"`` (time-varying): it is a
+    function of the tick, evaluated at the tick read without being cached, so its stamp stays (a
+    reference is sampled anywhere on its horizon, as ``MinimumJerk`` is written to answer). The
+    check costs one integer comparison on the stale
     path (:meth:`_evaluate`); cached reads are untouched.
     """
 
@@ -242,9 +243,8 @@ class Output(Signal):
             return self._compute(t)
         needed = self._stale_upstream(t)
         for node in (*needed, self):
-            stamp = node._time
-            if stamp is not None and t < stamp and not node.time_varying:
-                raise _past_tick_error(node, t, stamp)
+            if _stamped_after(node, t) and not node.time_varying:
+                raise _past_tick_error(node, t, node._time)
         for node in needed:  # stamped at or before t (or never): computing at t moves no stamp back
             if node._stale and not _stamped_after(node, t):  # an earlier on-demand read may have computed it
                 node._compute(t)
