@@ -254,8 +254,8 @@ class Entity:
         for name, port in cls._port_templates.items():
             kind = {Input: "input", State: "state"}.get(type(port), "output")
             doc = f"  -- {port.doc.splitlines()[0]}" if port.doc else ""
-            dtype = getattr(port._dtype, "__name__", port._dtype)  # a structured type by its class name
-            lines.append(f"  {kind:<7} {name} {dtype}{_shape_text(port._shape_decl)}{doc}")
+            shape = "" if port.spec.structured else _shape_text(port._shape_decl)  # a structure has none
+            lines.append(f"  {kind:<7} {name} {port.spec.type_name}{shape}{doc}")
         for name in cls._command_names:
             doc = (getattr(cls, name).__doc__ or "").strip().splitlines()
             lines.append(f"  command {name}()" + (f"  -- {doc[0]}" if doc else ""))

@@ -62,7 +62,7 @@ class Spec:
 
     def __repr__(self) -> str:
         if self.structured:
-            return self.dtype.__name__
+            return self.type_name
         shape = "any" if self.shape is None else "(" + ", ".join(
             "*" if d is None else str(d) for d in self.shape) + ("," if len(self.shape) == 1 else "") + ")"
         return f"{self.dtype}{shape}"
