@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from dgraph.entities.recording import rerun_stream
-from dgraph.entities.recording.rerun_stream import ServeAddress, open_stream, set_serve_address
+from dgraph.entities.recording.rerun_stream import ServeAddress, open_stream, serving_on
 from dgraph.errors import GraphError
 
 LISTEN = "0A"
@@ -62,15 +62,16 @@ def test_serve_listens_on_loopback_by_default_and_prints_the_viewer_url(ports, m
     assert listening(grpc) == set() and listening(web) == set()  # stopped with the stream
 
 
-def test_serve_listens_where_it_is_told(ports, monkeypatch):
+def test_serve_listens_where_it_is_told(ports):
     grpc, web = ports
-    monkeypatch.setattr(rerun_stream, "SERVE", rerun_stream.SERVE)  # restored afterwards
-    set_serve_address("127.0.0.2", grpc, web)  # another address of this machine, wider than the default
-    stream = open_stream("serve-test", "serve", None, 0.001, owner=object())
-    try:
-        assert listening(grpc) == {"127.0.0.2"} and listening(web) == {"127.0.0.2"}
-    finally:
-        stream.close()
+    default = rerun_stream.SERVE
+    with serving_on("127.0.0.2", grpc, web):  # another address of this machine, wider than the default
+        stream = open_stream("serve-test", "serve", None, 0.001, owner=object())
+        try:
+            assert listening(grpc) == {"127.0.0.2"} and listening(web) == {"127.0.0.2"}
+        finally:
+            stream.close()
+    assert rerun_stream.SERVE is default  # for the block only
 
 
 def test_a_port_in_use_is_reported_before_starting(ports):
@@ -86,5 +87,5 @@ def test_a_port_in_use_is_reported_before_starting(ports):
 def test_a_wildcard_bind_is_reached_on_loopback_and_shown_by_host_name():
     assert ServeAddress("0.0.0.0").local_host() == "127.0.0.1" and ServeAddress("::").local_host() == "::1"
     assert ServeAddress("0.0.0.0").public_host() == socket.gethostname()
-    with pytest.raises(GraphError, match="'localhost': not an IP address"):
-        set_serve_address("localhost")
+    with pytest.raises(GraphError, match="'localhost': not an IP address"), serving_on("localhost"):
+        pass

@@ -2,7 +2,7 @@
 
 Rerun is imported only when a stream is opened. Sinks: ``save`` (an .rrd file, the default
 when headless), ``spawn`` (a local viewer process) and ``serve`` (a gRPC server and a web viewer,
-listening on loopback unless :func:`set_serve_address` says otherwise; see :class:`RerunServer`).
+listening on loopback unless :func:`serving_on` says otherwise; see :class:`RerunServer`).
 Series are sent in blocks of ticks, every series of a block in one Arrow record batch
 (one ``send_record_batch`` call: Rerun's cost is per call and per entity, not per row), so
 logging costs a few µs per tick instead of ~37 µs per ``log`` call.
@@ -57,30 +57,26 @@ class ServeAddress:
 
 
 SERVE = ServeAddress()
-"""What the ``serve`` sink opens (:func:`set_serve_address`; ``dgraph run --rerun-bind``)."""
-
-
-def set_serve_address(bind: str, grpc_port: int | None = None, web_port: int | None = None) -> ServeAddress:
-    """Make the ``serve`` sinks opened from now on listen on ``bind`` (an IP address), and on
-    these ports if given (else the ports set before)."""
-    global SERVE
-    try:
-        ipaddress.ip_address(bind)
-    except ValueError:
-        raise GraphError(f"Rerun serve address {bind!r}: not an IP address (127.0.0.1, 0.0.0.0, ::...)") from None
-    SERVE = ServeAddress(bind, SERVE.grpc_port if grpc_port is None else grpc_port,
-                         SERVE.web_port if web_port is None else web_port)
-    return SERVE
+"""What the ``serve`` sink opens (:func:`serving_on`; ``dgraph run --rerun-bind``)."""
 
 
 @contextlib.contextmanager
-def serving_on(bind: str | None) -> Iterator[ServeAddress]:
-    """Within the block, ``serve`` sinks listen on ``bind`` (``None``: where they would); the
-    address is restored after it, so one run's ``--rerun-bind`` does not widen the next one's."""
+def serving_on(bind: str | None, grpc_port: int | None = None, web_port: int | None = None
+               ) -> Iterator[ServeAddress]:
+    """Within the block, ``serve`` sinks listen on ``bind`` (an IP address; ``None``: where they
+    would) and on these ports if given; the address is restored after it, so one run's
+    ``--rerun-bind`` does not widen the next one's."""
     global SERVE
     before = SERVE
+    if bind is not None:
+        try:
+            ipaddress.ip_address(bind)
+        except ValueError:
+            raise GraphError(f"Rerun serve address {bind!r}: not an IP address (127.0.0.1, 0.0.0.0, ::...)") from None
+    SERVE = ServeAddress(before.bind if bind is None else bind, grpc_port or before.grpc_port,
+                         web_port or before.web_port)
     try:
-        yield SERVE if bind is None else set_serve_address(bind)
+        yield SERVE
     finally:
         SERVE = before
 
