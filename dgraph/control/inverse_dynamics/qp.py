@@ -95,11 +95,11 @@ class ForceCost:
         self.reference_metric = None if contact.force_metric is None else -2.0 * contact.force_weight * metric
         self.written = (contact.force_weight, contact.force_metric)
 
-    def write(self, contact: ContactConstraint, scale: float) -> bool:
-        """The force reference ``-2 w_c s M_c f*_c`` into the gradient; True if the constant part
-        was written again."""
-        rewritten = contact.force_weight != self.written[0] or contact.force_metric is not self.written[1]
-        if rewritten:
+    def write(self, contact: ContactConstraint, scale: float) -> None:
+        """The force reference ``-2 w_c s M_c f*_c`` into the gradient (and the constant part
+        again if the contact hands over another weight or metric: it is in ``H``, which ProxQP
+        gets every tick, so no row is marked changed)."""
+        if contact.force_weight != self.written[0] or contact.force_metric is not self.written[1]:
             self.write_constant(contact)
         if contact.force_reference is not None:  # -2 w_c s M f*
             if self.reference_metric is None:
@@ -111,7 +111,6 @@ class ForceCost:
         elif self.has_reference:
             self.gradient.fill(0.0)
             self.has_reference = False
-        return rewritten
 
 
 class Workspace:
@@ -226,8 +225,7 @@ class InverseDynamicsQP:
         if torque_bounds:
             ws.rows.write_torque_bounds(bias_forces)
         for contact, cost in zip(contacts, ws.forces, strict=True):
-            if cost.write(contact, scale):
-                ws.free_rows_changed = True
+            cost.write(contact, scale)
         if bounded:
             self._write_passivity_row(ws, passivity, bias_forces)
             ws.free_rows_changed = True
