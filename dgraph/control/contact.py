@@ -45,6 +45,10 @@ class ContactConstraint:
         """Number of force variables."""
         return self.force_generator.shape[1]
 
+    def metric(self) -> np.ndarray:
+        """``M``, the metric of the force cost (the identity when ``force_metric`` is None)."""
+        return np.eye(self.n_forces) if self.force_metric is None else self.force_metric
+
     def world_wrench(self, forces: np.ndarray) -> np.ndarray:
         """The contact wrench ``[force, torque]`` at the contact frame origin, world axes (a point
         contact, whose generator gives a force only, has no torque)."""

@@ -123,6 +123,12 @@ class ConstraintRows:
             friction_row += len(contact.friction_lower)
 
     @staticmethod
+    def key(contacts: list[ContactConstraint]) -> tuple[tuple[object, ...], ...]:
+        """What decides the rows' layout: each contact's name and sizes (rows made for one key
+        serve every tick with the same key)."""
+        return tuple((c.name, c.n_forces, len(c.friction_lower), len(c.motion_rhs)) for c in contacts)
+
+    @staticmethod
     def shapes(nv: int, n_unactuated: int, contacts: list[ContactConstraint],
                extra_rows: int = 0) -> tuple[tuple[int, ...], ...]:
         """The shapes of ``A``, ``b``, ``C``, ``lower``, ``upper``."""

@@ -90,7 +90,7 @@ class ForceCost:
     def write_constant(self, contact: ContactConstraint) -> None:
         """The regularisation ``2 w_c M_c`` (constant: written again only when the contact hands
         over another weight or metric)."""
-        metric = np.eye(contact.n_forces) if contact.force_metric is None else contact.force_metric
+        metric = contact.metric()
         np.multiply(metric, 2.0 * contact.force_weight, out=self.hessian)
         self.reference_metric = None if contact.force_metric is None else -2.0 * contact.force_weight * metric
         self.written = (contact.force_weight, contact.force_metric)
@@ -183,7 +183,7 @@ class InverseDynamicsQP:
     # -- assembly ----------------------------------------------------------------------------
     def workspace(self, contacts: list[ContactConstraint], passivity_row: bool) -> Workspace:
         """The workspace of this set of active contacts (by name and size)."""
-        key = (passivity_row, *((c.name, c.n_forces, len(c.friction_lower), len(c.motion_rhs)) for c in contacts))
+        key = (passivity_row, *ConstraintRows.key(contacts))
         ws = self._workspaces.get(key)
         if ws is None:
             ws = self._workspaces[key] = Workspace(self, contacts, passivity_row)

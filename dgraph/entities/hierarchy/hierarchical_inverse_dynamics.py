@@ -77,7 +77,7 @@ class HierarchicalInverseDynamics(StackCommands, TorqueSolver):
 
     def _constraint_rows(self, contacts: list[ContactConstraint]) -> ConstraintRows:
         """The rows of this set of active contacts (by name and size), made on first use."""
-        key = tuple((c.name, c.n_forces, len(c.friction_lower), len(c.motion_rhs)) for c in contacts)
+        key = ConstraintRows.key(contacts)
         rows = self._constraints.get(key)
         if rows is None:
             rows = self._constraints[key] = ConstraintRows(self.nv, self.n_unactuated, self.effort_limit, contacts)
@@ -92,8 +92,7 @@ class HierarchicalInverseDynamics(StackCommands, TorqueSolver):
         if level is None:
             blocks = [np.sqrt(self.acceleration_weight) * np.eye(self.nv)]
             for c in contacts:
-                metric = np.eye(c.n_forces) if c.force_metric is None else c.force_metric
-                blocks.append(np.sqrt(c.force_weight) * np.linalg.cholesky(metric).T)  # U^T U = M
+                blocks.append(np.sqrt(c.force_weight) * np.linalg.cholesky(c.metric()).T)  # U^T U = M
             matrix = scipy.linalg.block_diag(*blocks)
             level = RowBlock.equalities(matrix, np.zeros(len(matrix)), key=("regularisation", key))
             self._regularisations[key] = level
