@@ -19,3 +19,7 @@ class Passivity:
     scale: float
     power_bound: float | None
     velocity: np.ndarray
+
+    def without_bound(self) -> Passivity:
+        """The same scale without the passivity row (a relaxed solve)."""
+        return Passivity(self.scale, None, self.velocity)

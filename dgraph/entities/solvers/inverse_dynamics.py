@@ -78,15 +78,15 @@ class InverseDynamicsSolver(TorqueSolver):
         passivity = self.passivity(t) if self.passive else None
         relax = passivity is not None and not self._qp.reaches(passivity)
         if relax:  # no torque within the limits delivers the bound: ProxQP would only run to its limit
-            passivity = Passivity(passivity.scale, None, passivity.velocity)
+            passivity = passivity.without_bound()
         try:  # a task whose rows do not fit its block (shape, negative weights) is named here
             solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, contacts, t, passivity)
         except TaskRowsError as exc:
             raise self._bad_equation(tasks, t, exc) from exc
         if solution.status != SOLVED and passivity is not None and passivity.power_bound is not None:
             relax = True
-            relaxed = Passivity(passivity.scale, None, passivity.velocity)
-            solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, contacts, t, relaxed)
+            solution = self._qp.solve(state.mass_matrix, state.bias_forces, tasks, contacts, t,
+                                      passivity.without_bound())
         solution.passivity_relaxed = relax
         solution.contact_rows = rows
         if solution.status != SOLVED:
