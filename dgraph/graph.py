@@ -178,7 +178,7 @@ class Graph:
 
     @property
     def check_values(self) -> bool:
-        """Debug switch: check every computed value against its spec (shape, NaN). Off by default:
+        """Debug switch: check every computed value against its spec (shape, NaN, inf). Off by default:
         shapes are checked when plugging, and what acts on the world checks what it consumes every
         tick (a device its command, a solver its QP data), falling back safely with a status."""
         return self.clock.check_values

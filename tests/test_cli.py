@@ -192,11 +192,11 @@ def test_run_a_10000_deep_chain(tmp_path):
 
 
 @pytest.mark.filterwarnings("ignore:invalid value")
-def test_debug_checks_name_the_first_signal_that_computes_nan(tmp_path):
-    """An infinite setpoint: inf - inf gives NaN at tick 1 in ``error``. By default the NaN is
-    caught where it would become the device's state; the debug switch names where it starts."""
+def test_debug_checks_name_the_first_signal_that_computes_a_non_finite_value(tmp_path):
+    """An infinite setpoint: by default the infinity is caught where it would become the device's
+    state; the debug switch names where it starts (an infinity is refused like a NaN)."""
     args = ("run", PD, "--ticks", "5", "--rerun", "off", "-q", "--set", "setpoint.value=[.inf, 0.0]")
     plain = dgraph_cli(*args, cwd=tmp_path)
     checked = dgraph_cli(*args, "--debug-checks", cwd=tmp_path)
-    assert plain.returncode == 2 and "robot.q: value contains NaN" in plain.stderr, plain.stderr
-    assert checked.returncode == 2 and "error.output at tick 1: computed a value containing NaN" in checked.stderr
+    assert plain.returncode == 2 and "robot.q: staged value contains inf" in plain.stderr, plain.stderr
+    assert checked.returncode == 2 and "setpoint.output at tick 0: computed a value containing inf" in checked.stderr

@@ -30,7 +30,7 @@ class Clock:
         latest: the latest tick at which a signal was read (:data:`BEFORE_TIME` before the first
             read); every stamp computed on this clock is at most this.
         cache_enabled: when False every read recomputes (for validating the cache).
-        check_values: check each computed value against its spec (shape, NaN); a debugging aid, off by
+        check_values: check each computed value against its spec (shape, NaN, inf); a debugging aid, off by
             default (shapes are checked at plug time; devices and solvers check what they consume).
         profiling: time each computation (``Output.total_duration``, exclusive of upstream).
         inner: profiling accumulator of the time spent in nested computations.

@@ -16,13 +16,16 @@ instance binds its own copy (see :mod:`dgraph.entity`). The contract is written 
 from __future__ import annotations
 
 import itertools
+import math
 import time as _time
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from dgraph.errors import ComputeError, DGraphError, PlugError, SpecError, UnpluggedInputError
 from dgraph.signals.clock import Clock
-from dgraph.signals.spec import DType, ShapeDecl, Spec, exact_float_copy, has_nan, resolve_shape
+from dgraph.signals.spec import DType, ShapeDecl, Spec, exact_float_copy, non_finite, resolve_shape
 
 if TYPE_CHECKING:
     import numpy as np
@@ -49,17 +52,18 @@ def structure_changed() -> None:
 class Signal:
     """Common part of inputs and outputs: owner, name, spec and documentation."""
 
-    __slots__ = ("_dtype", "_labels", "_shape_decl", "doc", "entity", "name", "spec")
+    __slots__ = ("_dtype", "_finite", "_labels", "_shape_decl", "doc", "entity", "name", "spec")
 
     def __init__(self, shape: ShapeDecl = None, dtype: DType = "float",
-                 labels: Sequence[str] | None = None, doc: str = ""):
+                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True):
         self.entity: Entity | None = None
         self.name = ""
         self._shape_decl = shape
         self._dtype = dtype
         self._labels = labels
+        self._finite = finite
         self.spec = Spec(shape if isinstance(shape, tuple) and all(
-            d is None or isinstance(d, int) for d in shape) else None, dtype, labels)
+            d is None or isinstance(d, int) for d in shape) else None, dtype, labels, finite)
         self.doc = doc
 
     @property
@@ -74,10 +78,11 @@ class Signal:
         other._shape_decl = self._shape_decl
         other._dtype = self._dtype
         other._labels = self._labels
+        other._finite = self._finite
         other.doc = self.doc
         where = f"{entity.name}.{name}"
         try:
-            other.spec = Spec(resolve_shape(self._shape_decl, entity), self._dtype, self._labels)
+            other.spec = Spec(resolve_shape(self._shape_decl, entity), self._dtype, self._labels, self._finite)
         except SpecError as exc:
             raise SpecError(f"{where}: {exc}", entity=entity.name, signal=name) from None
 
@@ -147,8 +152,8 @@ class Output(Signal):
     def __init__(self, fn: Callable[..., Any] | None = None, *, shape: ShapeDecl = None,
                  dtype: DType = "float", depends: Sequence[str] | None = None, period: int = 1,
                  labels: Sequence[str] | None = None, doc: str = "",
-                 on_demand: Sequence[str] | bool = ()):
-        super().__init__(shape, dtype, labels, doc or (fn.__doc__ or "" if fn else "").strip())
+                 on_demand: Sequence[str] | bool = (), finite: bool = True):
+        super().__init__(shape, dtype, labels, doc or (fn.__doc__ or "" if fn else "").strip(), finite)
         if not isinstance(period, int) or period < 1:
             raise SpecError(f"period must be an int >= 1, got {period!r}")
         self._fn = fn
@@ -479,8 +484,8 @@ class State(Output):
     __slots__ = ("_staged", "initial")
 
     def __init__(self, *, shape: ShapeDecl = None, dtype: DType = "float", initial: Any = None,
-                 labels: Sequence[str] | None = None, doc: str = ""):
-        super().__init__(None, shape=shape, dtype=dtype, depends=(), labels=labels, doc=doc)
+                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True):
+        super().__init__(None, shape=shape, dtype=dtype, depends=(), labels=labels, doc=doc, finite=finite)
         self.initial = initial
         self._staged: Any = _UNSET
 
@@ -511,8 +516,14 @@ class State(Output):
         as the result of a gather (a device's sensors), it saves a copy per state per tick.
         ``nan_checked``: the caller found no NaN in ``value`` (:func:`stage_views`).
         """
-        array = exact_float_copy(self.spec, value, copy, nan_checked)  # the common case, before the general one
-        self._staged = array if array is not None else _coerce(self, value, copy)
+        spec = self.spec
+        array = exact_float_copy(spec, value, copy, nan_checked, spec.finite)  # the common case first
+        if array is None:
+            array = _coerce(self, value, copy)
+            if spec.finite and spec.dtype == "float" and _infinite(array):
+                raise SpecError(f"{self.full_name}: staged value contains inf: {_short(array)}",
+                                entity=self.entity.name if self.entity else None, signal=self.name)
+        self._staged = array
 
     def commit(self, t: int) -> None:
         """Publish the staged value as the state at tick ``t``; invalidate everything downstream."""
@@ -545,7 +556,7 @@ def stage_views(groups: Sequence[tuple[np.ndarray, Sequence[tuple[State, slice |
     first state with a NaN, as :meth:`State.stage` would. The views are kept as they are, like
     ``copy=False``: the blocks must be arrays nobody writes again."""
     for block, parts in groups:
-        checked = not has_nan(block)
+        checked = not non_finite(block)
         for state, index in parts:
             state.stage(block if index is None else block[index], False, checked)
 
@@ -573,8 +584,8 @@ class Input(Signal):
     __slots__ = ("_has_value", "_set_time", "_source", "_subs", "_value", "default", "is_set")
 
     def __init__(self, shape: ShapeDecl = None, dtype: DType = "float", default: Any = _UNSET,
-                 labels: Sequence[str] | None = None, doc: str = ""):
-        super().__init__(shape, dtype, labels, doc)
+                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True):
+        super().__init__(shape, dtype, labels, doc, finite)
         self.default = default
         self._source: Output | None = None
         self._value: Any = None
@@ -714,6 +725,14 @@ def _coerce(sig: Signal, value: Any, copy: bool = True) -> Any:
         raise SpecError(str(exc), entity=sig.entity.name if sig.entity else None, signal=sig.name) from None
 
 
+def _infinite(value: Any) -> bool:
+    """True if a coerced float value (a float or a float array) holds an infinity (NaN is
+    refused before)."""
+    if isinstance(value, float):
+        return math.isinf(value)
+    return isinstance(value, np.ndarray) and value.dtype.kind == "f" and non_finite(value)
+
+
 def _short(value: Any) -> str:
     text = repr(value).replace("\n", "")
     return text if len(text) <= 50 else text[:47] + "..."
@@ -721,7 +740,7 @@ def _short(value: Any) -> str:
 
 def output(shape: ShapeDecl = None, dtype: DType = "float", depends: Sequence[str] | None = None,
            period: int = 1, labels: Sequence[str] | None = None, doc: str = "",
-           on_demand: Sequence[str] | bool = ()) -> Callable[[Callable[..., Any]], Output]:
+           on_demand: Sequence[str] | bool = (), finite: bool = True) -> Callable[[Callable[..., Any]], Output]:
     """Decorator declaring a computed output from a method ``def name(self, t)``.
 
     ``depends`` lists the names of the entity's inputs, states and other outputs that the
@@ -732,10 +751,11 @@ def output(shape: ShapeDecl = None, dtype: DType = "float", depends: Sequence[st
     dependency order. ``on_demand`` names the dependencies the method reads only on some ticks
     (``True``: all of them), such as the unselected inputs of a switch: they still invalidate
     the output, but are computed only if the method reads them.
+    ``finite=False``: the value may hold infinities (value checks refuse only NaN then).
     """
 
     def wrap(fn: Callable[..., Any]) -> Output:
         return Output(fn, shape=shape, dtype=dtype, depends=depends, period=period, labels=labels, doc=doc,
-                      on_demand=on_demand)
+                      on_demand=on_demand, finite=finite)
 
     return wrap

@@ -36,12 +36,18 @@ class Spec:
     constraint, a robot state...) and which plugs only into an input of the same class or a base
     class of it. ``labels`` optionally names the components of a
     vector (used by recorders and plots).
+
+    ``finite`` (float signals): a value with NaN is always refused; with ``finite`` (the
+    default) an infinity is refused too where computed values are checked (``check_values``)
+    and where states are staged. A port whose values may legitimately be infinite (an unbounded
+    bound, the residual of an invalid level, a fault injector's output) declares ``finite=False``.
+    Constants set on inputs may be infinite (a saturation without a bound).
     """
 
-    __slots__ = ("dtype", "exact", "labels", "shape", "structured")
+    __slots__ = ("dtype", "exact", "finite", "labels", "shape", "structured")
 
     def __init__(self, shape: tuple[int | None, ...] | None = None, dtype: DType = "float",
-                 labels: Sequence[str] | None = None):
+                 labels: Sequence[str] | None = None, finite: bool = True):
         self.structured = isinstance(dtype, type)
         if not self.structured and dtype not in DTYPES:
             raise SpecError(f"unknown dtype {dtype!r}; expected one of {DTYPES} or a class")
@@ -53,6 +59,7 @@ class Spec:
         self.shape = None if shape is None else tuple(shape)
         self.dtype = dtype
         self.labels = tuple(labels) if labels is not None else None
+        self.finite = bool(finite)
         self.exact = self.shape is not None and all(d is not None for d in self.shape)
 
     @property
@@ -162,8 +169,15 @@ class Spec:
             raise SpecError(f"{where}: expected a bool, got {_short(value)}")
         return bool(value)
 
+    def _non_finite(self, array: np.ndarray) -> str | None:
+        """``computed a value containing NaN`` (or ``inf``, if ``finite``), or None."""
+        if not (non_finite(array) if self.finite else has_nan(array)):
+            return None
+        return f"computed a value containing {'NaN' if has_nan(array) else 'inf'}"
+
     def problem(self, value: Any) -> str | None:
-        """What is wrong with a computed value (type, shape, NaN), or None. Cheap when fine."""
+        """What is wrong with a computed value (type, shape, NaN, and inf unless ``finite`` is
+        false), or None. Cheap when fine."""
         if self.dtype == "object":
             return None
         if self.structured:
@@ -171,18 +185,20 @@ class Spec:
                 f"computed a {type(value).__name__}, declared {self.dtype.__name__}"
         if (type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == self.shape
                 and self.dtype == "float"):  # the common case: the general path below, in short
-            return "computed a value containing NaN" if has_nan(value) else None
+            return self._non_finite(value)
         if type(value) is float and self.dtype == "float":
             if value != value:
                 return "computed NaN"
+            if self.finite and value in (math.inf, -math.inf):
+                return f"computed {value}"
             if self.shape is not None and self.shape != ():
                 return f"computed a scalar, declared {self!r}"
             return None
         if isinstance(value, np.ndarray):
             if not self._shape_ok(value.shape):
                 return f"computed shape {value.shape}, declared {self!r}"
-            if value.dtype.kind == "f" and has_nan(value):
-                return "computed a value containing NaN"
+            if value.dtype.kind == "f" and self._non_finite(value):
+                return self._non_finite(value)
             if value.dtype.kind != _KIND[self.dtype] and not (self.dtype == "float" and value.dtype.kind in "iub"):
                 return f"computed an array of {value.dtype}, declared {self!r}"
             return None
@@ -200,15 +216,18 @@ _KIND = {"float": "f", "int": "i", "bool": "b"}
 _FLOAT64 = np.dtype(np.float64)
 
 
-def exact_float_copy(spec: Spec, value: Any, copy: bool = True, nan_checked: bool = False) -> np.ndarray | None:
+def exact_float_copy(spec: Spec, value: Any, copy: bool = True, nan_checked: bool = False,
+                     refuse_inf: bool = False) -> np.ndarray | None:
     """The fast path that signals take before :meth:`Spec.coerce`: a float64 array of exactly
     the declared (non-scalar) shape of a float spec, without NaN, gives a copy (or itself, with
     ``copy=False``); anything else (even an equivalent value) gives None, and the general path
-    converts it or raises. ``nan_checked``: the caller has checked ``value`` for NaN."""
+    converts it or raises. ``nan_checked``: the caller has checked ``value`` (for NaN, and for
+    inf with ``refuse_inf``). ``refuse_inf`` (a state of a ``finite`` spec): an infinity also
+    takes the general path."""
     if (type(value) is np.ndarray and value.dtype is _FLOAT64 and value.shape == spec.shape
             and spec.dtype == "float" and value.ndim):
         array = value.copy() if copy else value
-        if nan_checked or not has_nan(array):
+        if nan_checked or not (non_finite(array) if refuse_inf else has_nan(array)):
             return array
     return None
 
@@ -218,6 +237,14 @@ def has_nan(array: np.ndarray) -> bool:
     square to +inf), and one BLAS dot is cheaper than ``np.isnan(array).any()``."""
     total = np.vdot(array, array)
     return total != total
+
+
+def non_finite(array: np.ndarray) -> bool:
+    """True if a float array holds a NaN or an infinity. One BLAS dot decides when the array is
+    finite and not huge (the sum of squares is then finite); only a sum that overflows (a NaN,
+    an inf, or values beyond about 1e154) is looked at element by element."""
+    total = np.vdot(array, array)
+    return not math.isfinite(total) and not bool(np.isfinite(array).all())
 
 
 def _short(value: Any) -> str:

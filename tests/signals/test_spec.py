@@ -90,11 +90,15 @@ def test_repr():
     assert repr(Spec((3,))) == "float(3,)" and repr(Spec((None, 2), "int")) == "int(*, 2)"
 
 
-def test_infinities_are_values_and_nan_is_found_behind_them():
+def test_infinities_are_constants_not_computed_values_and_nan_is_found_behind_them():
     spec = Spec((3,))
     value = spec.coerce(np.array([np.inf, -np.inf, 1.0]), "x")  # the sum is NaN, but no entry is
-    assert np.isinf(value[:2]).all()
-    assert spec.problem(np.array([np.inf, -np.inf, 1.0])) is None
+    assert np.isinf(value[:2]).all()  # a constant may be unbounded (a saturation's bound)
+    assert spec.problem(np.array([np.inf, -np.inf, 1.0])) == "computed a value containing inf"
+    assert spec.problem(np.array([1e200, -1e200, 1.0])) is None  # huge is not infinite
+    assert Spec(()).problem(3.0) is None and Spec(()).problem(-np.inf) == "computed -inf"
+    assert Spec((3,), finite=False).problem(np.array([np.inf, -np.inf, 1.0])) is None
+    assert "NaN" in Spec((3,), finite=False).problem(np.array([np.inf, np.nan, 1.0]))
     assert "NaN" in spec.problem(np.array([1.0, np.nan, 2.0]))
     with pytest.raises(SpecError, match="NaN"):
         spec.coerce(np.array([np.inf, np.nan, 0.0]), "x")

@@ -104,10 +104,11 @@ class HierarchicalSolver(StackCommands, SolverReport, dg.Entity):
         """``v`` (after a failed level, the levels above it; zeros for non-finite rows)."""
         return self.solution(t).x
 
-    @dg.output(shape=None, depends=("solution",))
+    @dg.output(shape=None, depends=("solution",), finite=False)
     def level_residuals(self, t: int) -> np.ndarray:
         """``sqrt(||A_k v - b_k||^2 + ||s_k||^2)`` per level of the stack (0 for a level whose
-        tasks are all inactive: it has no rows; an index always names the same level), then ``||v||``."""
+        tasks are all inactive: it has no rows; an index always names the same level; inf for a
+        level that was not solved), then ``||v||``."""
         return self.solution(t).residuals
 
     @dg.output(shape=(), dtype="int", depends=("solution",))
