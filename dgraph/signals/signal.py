@@ -52,18 +52,20 @@ def structure_changed() -> None:
 class Signal:
     """Common part of inputs and outputs: owner, name, spec and documentation."""
 
-    __slots__ = ("_dtype", "_finite", "_labels", "_shape_decl", "doc", "entity", "name", "spec")
+    __slots__ = ("_dtype", "_finite", "_labels", "_minimum", "_shape_decl", "doc", "entity", "name", "spec")
 
     def __init__(self, shape: ShapeDecl = None, dtype: DType = "float",
-                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True):
+                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True,
+                 minimum: float | None = None):
         self.entity: Entity | None = None
         self.name = ""
         self._shape_decl = shape
         self._dtype = dtype
         self._labels = labels
         self._finite = finite
+        self._minimum = minimum
         self.spec = Spec(shape if isinstance(shape, tuple) and all(
-            d is None or isinstance(d, int) for d in shape) else None, dtype, labels, finite)
+            d is None or isinstance(d, int) for d in shape) else None, dtype, labels, finite, minimum)
         self.doc = doc
 
     @property
@@ -79,10 +81,12 @@ class Signal:
         other._dtype = self._dtype
         other._labels = self._labels
         other._finite = self._finite
+        other._minimum = self._minimum
         other.doc = self.doc
         where = f"{entity.name}.{name}"
         try:
-            other.spec = Spec(resolve_shape(self._shape_decl, entity), self._dtype, self._labels, self._finite)
+            other.spec = Spec(resolve_shape(self._shape_decl, entity), self._dtype, self._labels, self._finite,
+                              self._minimum)
         except SpecError as exc:
             raise SpecError(f"{where}: {exc}", entity=entity.name, signal=name) from None
 
@@ -578,14 +582,17 @@ class Input(Signal):
 
     ``inp(t)`` forwards to the plugged output; ``inp.set(v)`` stores a constant (unplugging
     first); ``default`` is used when neither. Reading an input with none of them raises
-    :class:`~dgraph.errors.UnpluggedInputError` naming ``entity.signal``.
+    :class:`~dgraph.errors.UnpluggedInputError` naming ``entity.signal``. ``minimum`` bounds the
+    constants (and the default) from below, element by element (:class:`~dgraph.signals.spec.Spec`):
+    a value below it is refused when it is set; what arrives through a plug is its reader's to check.
     """
 
     __slots__ = ("_has_value", "_set_time", "_source", "_subs", "_value", "default", "is_set")
 
     def __init__(self, shape: ShapeDecl = None, dtype: DType = "float", default: Any = _UNSET,
-                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True):
-        super().__init__(shape, dtype, labels, doc, finite)
+                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True,
+                 minimum: float | None = None):
+        super().__init__(shape, dtype, labels, doc, finite, minimum)
         self.default = default
         self._source: Output | None = None
         self._value: Any = None
@@ -714,11 +721,12 @@ def _coerce(sig: Signal, value: Any, copy: bool = True) -> Any:
     array of exactly the declared shape, or a float for a float scalar, takes the fast path,
     without building the name)."""
     spec = sig.spec
-    if type(value) is float and spec.dtype == "float" and spec.shape == () and value == value:
-        return value
-    array = exact_float_copy(spec, value, copy)
-    if array is not None:
-        return array
+    if spec.minimum is None:  # a bound takes the general path, which checks it
+        if type(value) is float and spec.dtype == "float" and spec.shape == () and value == value:
+            return value
+        array = exact_float_copy(spec, value, copy)
+        if array is not None:
+            return array
     try:
         return sig.spec.coerce(value, sig.full_name)
     except SpecError as exc:

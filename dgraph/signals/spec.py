@@ -42,12 +42,16 @@ class Spec:
     and where states are staged. A port whose values may legitimately be infinite (an unbounded
     bound, the residual of an invalid level, a fault injector's output) declares ``finite=False``.
     Constants set on inputs may be infinite (a saturation without a bound).
+
+    ``minimum`` (numeric signals): the smallest value a set value may hold, element by element
+    (a gain, a weight: ``0.0``); :meth:`coerce` refuses a value below it. It is checked where
+    values are set (constants, defaults), not on computed values.
     """
 
-    __slots__ = ("dtype", "exact", "finite", "labels", "shape", "structured")
+    __slots__ = ("dtype", "exact", "finite", "labels", "minimum", "shape", "structured")
 
     def __init__(self, shape: tuple[int | None, ...] | None = None, dtype: DType = "float",
-                 labels: Sequence[str] | None = None, finite: bool = True):
+                 labels: Sequence[str] | None = None, finite: bool = True, minimum: float | None = None):
         self.structured = isinstance(dtype, type)
         if not self.structured and dtype not in DTYPES:
             raise SpecError(f"unknown dtype {dtype!r}; expected one of {DTYPES} or a class")
@@ -60,6 +64,9 @@ class Spec:
         self.dtype = dtype
         self.labels = tuple(labels) if labels is not None else None
         self.finite = bool(finite)
+        if minimum is not None and (self.structured or dtype in ("bool", "object")):
+            raise SpecError(f"a minimum needs a numeric dtype, got {self.type_name}")
+        self.minimum = minimum
         self.exact = self.shape is not None and all(d is not None for d in self.shape)
 
     @property
@@ -122,7 +129,7 @@ class Spec:
             return self._coerce_structured(value, where)
         try:
             if self.shape == () or (self.shape is None and np.ndim(value) == 0):
-                return self._coerce_scalar(value, where)
+                return self._at_least_minimum(self._coerce_scalar(value, where), where)
             if type(value) is np.ndarray and value.dtype == _NUMPY[self.dtype]:
                 array = value.copy()
             else:
@@ -135,7 +142,14 @@ class Spec:
             raise SpecError(f"{where}: value of shape {array.shape} does not match {self!r}")
         if self.dtype == "float" and has_nan(array):
             raise SpecError(f"{where}: value contains NaN: {_short(value)}")
-        return array
+        return self._at_least_minimum(array, where)
+
+    def _at_least_minimum(self, value: Any, where: str) -> Any:
+        """``value`` (a coerced number or array) if no element is below :attr:`minimum`; else
+        :class:`SpecError` naming ``where``, the bound and the value."""
+        if self.minimum is not None and np.any(np.asarray(value) < self.minimum):
+            raise SpecError(f"{where}: must be >= {self.minimum:g}, got {_short(value)}")
+        return value
 
     def _coerce_structured(self, value: Any, where: str) -> Any:
         if isinstance(value, self.dtype):

@@ -650,3 +650,29 @@ def test_an_output_on_another_clock_still_computes_once_per_tick():
         source.c.set(10.0 * t)  # invalidates the reader too (across clocks, through the plug)
         assert reader.y(t) == 2.0 * (11.0 * t)
     assert source.y.count == 3 and reader.y.count == 3
+
+
+def test_an_input_minimum_refuses_constants_and_defaults_below_it_where_they_are_set(graph):
+    class Weighted(dg.Entity):
+        weight = dg.Input(default=1.0, minimum=0.0)
+        gain = dg.Input(shape=(2,), default=np.ones(2), minimum=0.0)
+
+        @dg.output(shape=None, depends=("weight", "gain"))
+        def y(self, t):
+            return self.weight(t) * self.gain(t)
+
+    e = graph.add(Weighted("e"))
+    e.weight.set(0.0)
+    e.gain.set(np.array([0.0, 3.0]))  # the float fast path of set is taken only without a bound
+    with pytest.raises(dg.SpecError, match=r"e\.weight: must be >= 0, got -1\.0") as caught:
+        e.weight.set(-1.0)
+    assert (caught.value.entity, caught.value.signal) == ("e", "weight")
+    with pytest.raises(dg.SpecError, match=r"e\.gain: must be >= 0"):
+        e.gain.set(np.array([1.0, -1e-9]))
+    assert e.weight.value == 0.0 and e.gain.value.tolist() == [0.0, 3.0]  # the refused values were not kept
+
+    class BadDefault(dg.Entity):
+        k = dg.Input(default=-1.0, minimum=0.0)
+
+    with pytest.raises(dg.SpecError, match=r"b\.k: must be >= 0"):
+        BadDefault("b")

@@ -102,3 +102,16 @@ def test_infinities_are_constants_not_computed_values_and_nan_is_found_behind_th
     assert "NaN" in spec.problem(np.array([1.0, np.nan, 2.0]))
     with pytest.raises(SpecError, match="NaN"):
         spec.coerce(np.array([np.inf, np.nan, 0.0]), "x")
+
+
+def test_a_minimum_refuses_smaller_set_values_element_by_element():
+    scalar, vector = Spec((), minimum=0.0), Spec(None, minimum=0.0)
+    assert scalar.coerce(0, "w") == 0.0 and vector.coerce([0.0, 2.0], "k").tolist() == [0.0, 2.0]
+    with pytest.raises(SpecError, match=r"w: must be >= 0, got -1\.0"):
+        scalar.coerce(-1.0, "w")
+    with pytest.raises(SpecError, match=r"k: must be >= 0, got array\(\[ 1\., -2\.\]\)"):
+        vector.coerce(np.array([1.0, -2.0]), "k")
+    assert Spec((), "int", minimum=1).coerce(3, "n") == 3
+    with pytest.raises(SpecError, match="minimum needs a numeric dtype"):
+        Spec((), "bool", minimum=0.0)
+    assert Spec((2,)).problem(np.array([-1.0, 0.0])) is None  # computed values are not bounded
