@@ -91,8 +91,9 @@ class Param:
         doc: one line shown by ``dgraph entities``.
         choices: allowed values.
         optional: ``None`` is accepted in addition to ``kind``.
-        minimum, maximum: bounds of a number (sizes are bounded so that a file cannot ask
-            for a graph that exhausts the machine).
+        minimum, maximum: bounds of a number, or of every element of a ``vector`` or an
+            ``int_list`` (sizes are bounded so that a file cannot ask for a graph that exhausts
+            the machine).
     """
 
     __slots__ = ("choices", "default", "doc", "kind", "maximum", "minimum", "name", "optional")
@@ -127,10 +128,19 @@ class Param:
         if self.choices is not None and out not in self.choices:
             raise ParamError(f"{entity}: parameter {self.name!r} must be one of {list(self.choices)}, "
                              f"got {value!r}", entity=entity)
-        if (self.minimum is not None and out < self.minimum) or (self.maximum is not None and out > self.maximum):
+        if self._out_of_bounds(out):
             raise ParamError(f"{entity}: parameter {self.name!r} must be within [{self.minimum}, {self.maximum}], "
                              f"got {value!r}", entity=entity)
         return out
+
+    def _out_of_bounds(self, value: Any) -> bool:
+        """True if the number ``value``, or an element of a vector or list of numbers, lies
+        outside ``[minimum, maximum]``."""
+        if self.minimum is None and self.maximum is None:
+            return False
+        values = np.asarray(value, dtype=float)
+        return bool((self.minimum is not None and (values < self.minimum).any())
+                    or (self.maximum is not None and (values > self.maximum).any()))
 
     def describe(self) -> str:
         """``name: kind = default -- doc`` for listings."""

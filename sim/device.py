@@ -101,9 +101,9 @@ class MujocoDevice(dg.Device):
     collisions = dg.Param("all", kind="str", choices=("feet", "all"),
                           doc="robot geoms touching the scene: every collision mesh (never each other), or soles only")
     control_mode = dg.Param("torque", kind="str", choices=("torque", "position"), doc="what control commands")
-    kp = dg.Param(None, kind="vector", doc="position mode stiffness, N m/rad, scalar or one per joint "
+    kp = dg.Param(None, kind="vector", minimum=0.0, doc="position mode stiffness, N m/rad, scalar or one per joint "
                   "(default: the robot's, TALOS 3000, grippers 100)")
-    kd = dg.Param(None, kind="vector", doc="position mode damping, N m s/rad, scalar or one per joint "
+    kd = dg.Param(None, kind="vector", minimum=0.0, doc="position mode damping, N m s/rad, scalar or one per joint "
                   "(default: the robot's, TALOS 60, grippers 1)")
     q0 = dg.Param(None, kind="vector", doc="initial configuration, nq (default: half-sitting on the floor)")
     v0 = dg.Param(None, kind="vector", doc="initial velocity, nv (default: zeros)")

@@ -74,3 +74,13 @@ def test_nan_is_never_a_float_parameter():
     with pytest.raises(dg.ParamError, match="NaN"):
         Timed("t", delay=float("nan"))
     assert Timed("t", delay=float("inf")).delay == float("inf")  # infinity can mean something (a cutoff)
+
+
+def test_bounds_apply_to_every_element_of_a_vector_or_a_list():
+    gains = make("kp", kind="vector", minimum=0.0)
+    assert gains.convert([0.0, 3.0], "e").tolist() == [0.0, 3.0] and gains.convert(2.0, "e") == 2.0
+    for bad in (-1.0, [1.0, -1.0], [[1.0], [-2.0]]):
+        with pytest.raises(dg.ParamError, match=r"e: parameter 'kp' must be within \[0.0, None\]"):
+            gains.convert(bad, "e")
+    with pytest.raises(dg.ParamError, match=r"within \[0, 9\]"):
+        make("i", kind="int_list", minimum=0, maximum=9).convert([3, 10], "e")

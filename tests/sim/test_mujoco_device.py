@@ -399,6 +399,9 @@ def test_parameters_are_checked():
         MujocoDevice("sim", kp=[1.0, 2.0])
     with pytest.raises(dg.ParamError, match="q0 needs 39"):
         MujocoDevice("sim", q0=np.zeros(7))
+    for gain in ("kp", "kd"):  # a negative stiffness or damping would push the joints away
+        with pytest.raises(dg.ParamError, match=rf"sim: parameter '{gain}' must be within \[0.0, None\]"):
+            MujocoDevice("sim", control_mode="position", **{gain: [-1.0] + [1.0] * 31})
     assert dg.get_type("MujocoDevice") is MujocoDevice  # through the dgraph.entities entry point
 
 
