@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import os
 import re
+import socket
+import time
 from pathlib import Path
 
 import numpy as np
@@ -700,3 +702,143 @@ def test_the_readme_shows_the_sway_scenario_as_shipped():
     blocks = re.findall(r"```yaml\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
     scenario = next(block for block in blocks if "extends:" in block)
     assert yaml.safe_load(scenario) == yaml.safe_load((ROOT / "graphs" / "talos_sway.yaml").read_text())
+
+
+# -- a loader that cannot hang (issue 12) ------------------------------------------------------
+
+TRAJECTORY = "name: t\nentities:\n  ref: {{type: TrajectoryFile, params: {{path: {path}}}}}\n"
+
+
+def refused(call, *args, within: float = 1.0) -> dg.GraphFileError:
+    """The GraphFileError of ``call(*args)``, which must come within ``within`` seconds."""
+    start = time.perf_counter()
+    with pytest.raises(dg.GraphFileError) as info:
+        call(*args)
+    assert time.perf_counter() - start < within, str(info.value)
+    return info.value
+
+
+def located(error: dg.GraphFileError, file: Path | str, line: int | None, key: str | None) -> None:
+    assert (error.file, error.line, error.key) == (str(file), line, key), str(error)
+
+
+def unix_socket(path: Path) -> socket.socket:
+    sock = socket.socket(socket.AF_UNIX)
+    sock.bind(str(path))
+    return sock
+
+
+@pytest.mark.timeout(20)
+def test_a_symlink_loop_in_extends_is_located_at_the_extends_line(tmp_path):
+    (tmp_path / "self.yaml").symlink_to("self.yaml")
+    (tmp_path / "c.yaml").symlink_to("d.yaml")
+    (tmp_path / "d.yaml").symlink_to("c.yaml")
+    for target in ("self.yaml", "c.yaml"):
+        derived = write(tmp_path, "derived.yaml", f"name: x\nextends: {target}\n")
+        error = refused(dg.load, derived)
+        located(error, derived, 2, "extends")
+        assert f"cannot extend {target!r}" in str(error) and "symbolic links" in str(error)
+    error = refused(dg.load, tmp_path / "c.yaml")  # the file itself a loop
+    located(error, tmp_path / "c.yaml", None, None)
+    write(tmp_path, "good.yaml", GOOD)
+    assert loads("extends: good.yaml\n", str(tmp_path / "c.yaml")).name == "small"  # text named by a loop
+
+
+@pytest.mark.timeout(20)
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero", "directory", "socket"])
+def test_a_data_file_that_is_not_a_regular_file_is_refused_unread(kind, tmp_path):
+    target = {"fifo": tmp_path / "data.csv", "/dev/zero": Path("/dev/zero"), "directory": tmp_path,
+              "socket": tmp_path / "data.npz"}[kind]
+    if kind == "fifo":
+        os.mkfifo(target)
+    sock = unix_socket(target) if kind == "socket" else None
+    try:
+        path = write(tmp_path, "graph.yaml", TRAJECTORY.format(path=target))
+        error = refused(dg.load, path)
+        located(error, path, 3, "entities.ref.params.path")
+        assert "not a regular file" in str(error)
+        error = refused(dg.files.check, path)
+        located(error, path, 3, "entities.ref.params.path")
+        derived = write(tmp_path, "derived.yaml", f"extends: {path.name}\nset: {{ref.path: {target}}}\n")
+        located(refused(dg.load, derived), derived, 2, "set.ref.path")
+    finally:
+        if sock is not None:
+            sock.close()
+
+
+@pytest.mark.timeout(20)
+@pytest.mark.parametrize("kind", ["fifo", "/dev/zero", "directory", "socket"])
+def test_a_graph_file_that_is_not_a_regular_file_is_refused_unread(kind, tmp_path):
+    target = {"fifo": tmp_path / "base.yaml", "/dev/zero": Path("/dev/zero"), "directory": tmp_path / "d.yaml",
+              "socket": tmp_path / "base.yaml"}[kind]
+    if kind == "fifo":
+        os.mkfifo(target)
+    elif kind == "directory":
+        target.mkdir()
+    sock = unix_socket(target) if kind == "socket" else None
+    try:
+        located(refused(dg.load, target), target, None, None)
+        if kind != "/dev/zero":  # extends reads only .yaml files
+            derived = write(tmp_path, "derived.yaml", f"extends: {target.name}\n")
+            error = refused(dg.load, derived)
+            located(error, derived, 1, "extends")
+            assert "not a regular file" in str(error)
+    finally:
+        if sock is not None:
+            sock.close()
+
+
+@pytest.mark.timeout(20)
+def test_a_graph_file_swapped_for_a_fifo_after_its_check_is_not_waited_for(tmp_path, monkeypatch):
+    """The race: the path is a regular file when looked at, a FIFO when opened. It is opened
+    without blocking and looked at again."""
+    from dgraph.files import source
+
+    regular, fifo = write(tmp_path, "regular.yaml", GOOD), tmp_path / "fifo.yaml"
+    os.mkfifo(fifo)
+    real_stat = os.stat
+    monkeypatch.setattr(source.os, "stat", lambda p, *a, **k: real_stat(regular if str(p) == str(fifo) else p))
+    error = refused(dg.load, fifo)
+    assert "not a regular file" in str(error)
+
+
+@pytest.mark.timeout(20)
+def test_a_file_of_size_0_is_not_read(tmp_path):
+    """/proc files say size 0 and may never end (/proc/kmsg blocks once read to its end)."""
+    empty = write(tmp_path, "empty.csv", "")
+    for target in (empty, Path("/proc/self/environ")):
+        path = write(tmp_path, "graph.yaml", TRAJECTORY.format(path=target))
+        error = refused(dg.load, path)
+        located(error, path, 3, "entities.ref.params.path")
+        assert "it is empty (size 0" in str(error)
+    (tmp_path / "proc.yaml").symlink_to("/proc/self/environ")
+    located(refused(dg.load, tmp_path / "proc.yaml"), tmp_path / "proc.yaml", 1, None)  # "the file is empty"
+
+
+def test_files_larger_than_the_limits_are_refused_naming_the_limit(tmp_path):
+    from dgraph.files import MAX_BYTES, MAX_DATA_BYTES
+
+    big = tmp_path / "big.yaml"
+    big.write_text(GOOD + "#" * MAX_BYTES)
+    error = refused(dg.load, big)
+    assert f"larger than {MAX_BYTES} bytes" in str(error) and error.file == str(big)
+    data = tmp_path / "big.csv"
+    with data.open("wb") as f:
+        f.truncate(MAX_DATA_BYTES + 1)  # sparse: no disk used
+    path = write(tmp_path, "graph.yaml", TRAJECTORY.format(path="big.csv"))
+    error = refused(dg.load, path)
+    located(error, path, 3, "entities.ref.params.path")
+    assert f"larger than {MAX_DATA_BYTES} bytes" in str(error)
+
+
+def test_a_nul_byte_in_a_path_is_located(tmp_path):
+    derived = write(tmp_path, "derived.yaml", 'name: x\nextends: "base\\0.yaml"\n')
+    error = refused(dg.load, derived)
+    located(error, derived, 2, "extends")
+    assert "NUL" in str(error)
+    path = write(tmp_path, "graph.yaml", TRAJECTORY.format(path='"data\\0.csv"'))
+    error = refused(dg.load, path)
+    located(error, path, 3, "entities.ref.params.path")
+    assert "NUL" in str(error)
+    error = refused(dg.load, str(tmp_path / "a\0.yaml"))
+    assert error.file == str(tmp_path / "a\0.yaml") and "NUL" in str(error)

@@ -56,10 +56,11 @@ parameters from and to a file's folder) and :mod:`~dgraph.files.writing` (``dump
 
 from dgraph.files.build import check, load, loads
 from dgraph.files.composition import MAX_EXTENDS, RECORDER_NAME, SCALARS, declared_entities, parse
+from dgraph.files.paths import MAX_DATA_BYTES
 from dgraph.files.schema import NAME_RE, PLUG_PATTERN, PLUG_RE, SCHEMA, SIGNAL_RE, UNPLUG_PATTERN
 from dgraph.files.source import COMMAND_LINE, MAX_BYTES, MAX_NUMBER_CHARS, read_text
 from dgraph.files.writing import dumps, save, to_plain
 
-__all__ = ["COMMAND_LINE", "MAX_BYTES", "MAX_EXTENDS", "MAX_NUMBER_CHARS", "NAME_RE", "PLUG_PATTERN", "PLUG_RE",
-           "RECORDER_NAME", "SCALARS", "SCHEMA", "SIGNAL_RE", "UNPLUG_PATTERN", "check", "declared_entities", "dumps",
-           "load", "loads", "parse", "read_text", "save", "to_plain"]
+__all__ = ["COMMAND_LINE", "MAX_BYTES", "MAX_DATA_BYTES", "MAX_EXTENDS", "MAX_NUMBER_CHARS", "NAME_RE", "PLUG_PATTERN",
+           "PLUG_RE", "RECORDER_NAME", "SCALARS", "SCHEMA", "SIGNAL_RE", "UNPLUG_PATTERN", "check", "declared_entities",
+           "dumps", "load", "loads", "parse", "read_text", "save", "to_plain"]

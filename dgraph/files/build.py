@@ -11,7 +11,7 @@ from typing import Any
 
 from dgraph.errors import DGraphError, GraphError, GraphFileError
 from dgraph.files.composition import Composition, EntitySpec, Setting, compose, owner, split_settings, suggest
-from dgraph.files.paths import from_file
+from dgraph.files.paths import check_data_file, from_file
 from dgraph.files.source import At, latest, read_text
 from dgraph.graph import Graph
 from dgraph.params import Param
@@ -157,11 +157,12 @@ def _make_entity(name: str, spec: EntitySpec, settings: dict[str, Setting], robo
 def _params(name: str, spec: EntitySpec, decls: dict[str, Param], settings: dict[str, Setting],
             robot: Setting | None) -> tuple[dict[str, Any], At]:
     """The entity's parameters: its definition's, over them the settings of the files and the
-    command line, and the graph's robot as the ``model`` that none of them gives; and where a
-    refusal of the constructor is reported (the nearest file that had a say)."""
-    params = {key: from_file(value, decls.get(key), spec.at.doc) for key, value in spec.params.items()}
+    command line, and the graph's robot as the ``model`` that none of them gives (a data file
+    checked to be a regular file of a bounded size); and where a refusal of the constructor is
+    reported (the nearest file that had a say)."""
+    given = {key: (value, spec.where("params", key)) for key, value in spec.params.items()}
     extra = dict(settings)
-    if robot is not None and "model" in decls and "model" not in params:
+    if robot is not None and "model" in decls and "model" not in given:
         extra.setdefault("model", robot)
     blame = spec.where("params")
     for key, (value, at) in extra.items():
@@ -169,8 +170,12 @@ def _params(name: str, spec: EntitySpec, decls: dict[str, Param], settings: dict
             decls[key].convert(value, name)
         except DGraphError as exc:
             raise at.error(str(exc), exc) from None
-        params[key] = from_file(value, decls[key], at.doc)
+        given[key] = (value, at)
         blame = latest(blame, at)
+    params = {}
+    for key, (value, at) in given.items():
+        params[key] = from_file(value, decls.get(key), at.doc)
+        check_data_file(params[key], decls.get(key), at)
     return params, blame
 
 

@@ -6,6 +6,7 @@ remember the file and key that wrote each entry."""
 from __future__ import annotations
 
 import difflib
+import os
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,7 +15,17 @@ from typing import Any
 from dgraph.errors import DGraphError, GraphFileError
 from dgraph.files.paths import from_file, relative
 from dgraph.files.schema import PLUG_RE, validate
-from dgraph.files.source import COMMAND_LINE, At, Document, latest, plain_data, read_text
+from dgraph.files.source import (
+    COMMAND_LINE,
+    MAX_BYTES,
+    At,
+    Document,
+    Unreadable,
+    check_regular,
+    latest,
+    plain_data,
+    read_text,
+)
 from dgraph.params import Param
 from dgraph.registry import get_type
 
@@ -53,13 +64,9 @@ def _chain(text: str, file: str) -> list[tuple[dict[str, Any], Document]]:
     """The file and every file it extends, the deepest base first (its layer is 0)."""
     data, doc = _parse_file(text, file)
     chain = [(data, doc)]
-    seen = {Path(file).resolve()}
+    seen = {_identity(file)} - {None}
     while "extends" in data:
-        base = _base_file(data["extends"], doc, seen)
-        try:
-            base_text = read_text(base)
-        except GraphFileError as exc:
-            raise doc.error(f"cannot extend {data['extends']!r}: {exc}", ("extends",)) from None
+        base, base_text = _read_base(data["extends"], doc, seen)
         data, doc = _parse_file(base_text, str(base))  # a mistake in the base names the base
         chain.append((data, doc))
     chain.reverse()
@@ -68,17 +75,41 @@ def _chain(text: str, file: str) -> list[tuple[dict[str, Any], Document]]:
     return chain
 
 
-def _base_file(extends: str, doc: Document, seen: set[Path]) -> Path:
-    """The file that ``doc`` extends, refused if not a .yaml file, in a cycle or too deep."""
+def _identity(file: str) -> tuple[int, int] | None:
+    """The device and inode of ``file`` (its identity through any symlink), None if it names
+    no file."""
+    try:
+        status = os.stat(file)
+    except (OSError, ValueError):
+        return None
+    return status.st_dev, status.st_ino
+
+
+def _read_base(extends: str, doc: Document, seen: set[tuple[int, int]]) -> tuple[Path, str]:
+    """The file that ``doc`` extends and its text, refused (at ``doc``'s ``extends``) if not a
+    .yaml graph file that can be read, in a cycle or too deep."""
     base = Path(doc.file).parent / extends
     if base.suffix not in (".yaml", ".yml"):
         raise doc.error(f"can only extend a .yaml graph file, not {extends!r}", ("extends",))
-    if base.resolve() in seen:
+    try:
+        status = check_regular(base, MAX_BYTES)
+    except Unreadable as exc:
+        raise _cannot_extend(extends, doc, exc) from exc
+    if (status.st_dev, status.st_ino) in seen:
         raise doc.error(f"{extends!r} extends, directly or not, this file (a cycle)", ("extends",))
     if len(seen) >= MAX_EXTENDS:  # seen: this file and those it extends so far
         raise doc.error(f"a chain of more than {MAX_EXTENDS} files extending one another", ("extends",))
-    seen.add(base.resolve())
-    return base
+    seen.add((status.st_dev, status.st_ino))
+    try:
+        return base, read_text(base)
+    except GraphFileError as exc:
+        raise _cannot_extend(extends, doc, exc) from exc
+
+
+def _cannot_extend(extends: str, doc: Document, exc: GraphFileError) -> GraphFileError:
+    """The error, at ``doc``'s ``extends``, of a base that cannot be read."""
+    reason = exc.reason if isinstance(exc, Unreadable) else str(exc)
+    return doc.error(f"cannot extend {extends!r}: {reason}", ("extends",))
 
 
 @dataclass
@@ -90,9 +121,9 @@ class EntitySpec:
     at: At
     """Its definition: ``entities.NAME`` of a file (``record`` for the recorder it stands for)."""
 
-    def where(self, key: str) -> At:
-        """The place of its ``type`` or ``params``."""
-        return self.at.within(key) if self.at.path[0] == "entities" else self.at
+    def where(self, *keys: str) -> At:
+        """The place of its ``type``, its ``params`` or one of them (``"params", name``)."""
+        return self.at.within(*keys) if self.at.path[0] == "entities" else self.at
 
 
 def owner(key: str) -> str:
