@@ -159,7 +159,7 @@ def test_unreadable_files(tmp_path):
     (tmp_path / "latin1.yaml").write_bytes(b"name: caf\xe9\n")
     with pytest.raises(dg.GraphFileError, match="not UTF-8"):
         dg.load(tmp_path / "latin1.yaml")
-    with pytest.raises(dg.GraphFileError, match="nesting too deep|invalid YAML"):
+    with pytest.raises(dg.GraphFileError, match="nested more than 64 deep"):
         loads("entities: " + "[" * 5000 + "]" * 5000)
 
 
@@ -842,3 +842,54 @@ def test_a_nul_byte_in_a_path_is_located(tmp_path):
     assert "NUL" in str(error)
     error = refused(dg.load, str(tmp_path / "a\0.yaml"))
     assert error.file == str(tmp_path / "a\0.yaml") and "NUL" in str(error)
+
+
+DEEP = [
+    # (text, line of the refusal)
+    ("a: " + "[" * 3000 + "]" * 3000 + "\n", 1),
+    ("a: " + "{a: " * 3000 + "1" + "}" * 3000 + "\n", 1),
+    ("".join(" " * i + "k:\n" for i in range(500)) + " " * 500 + "v\n", 65),
+    ("".join(" " * i + "-\n" for i in range(500)), 65),
+    ("".join(" " * i + "k:\n" for i in range(1400)) + " " * 1400 + "v\n", None),  # line: libyaml's or 65
+    ("entities:\n  g: {type: Gain, params: {size: 2, gain: " + "[" * 70 + "]" * 70 + "}}\n", 2),
+]
+
+
+@pytest.mark.parametrize("loader", ["libyaml", "python"])
+@pytest.mark.parametrize(("text", "line"), DEEP,
+                         ids=["flow", "flow-mappings", "block", "block-sequences", "block-1400", "param"])
+def test_pathological_nesting_is_refused_quickly_with_its_line(text, line, loader, monkeypatch):
+    from dgraph.files import MAX_DEPTH, source
+
+    if loader == "python":
+        monkeypatch.setattr(source, "_SAFE_LOADER", source.PythonLoader)
+    error = refused(loads, text, within=0.2)
+    assert f"nested more than {MAX_DEPTH} deep" in str(error)
+    assert error.line == line or (line is None and error.line is not None), str(error)
+
+
+def test_nesting_up_to_the_limit_is_read():
+    from dgraph.files import MAX_DEPTH
+
+    def nested(depth: int) -> str:  # set (2) and lists inside, to ``depth`` levels
+        return "entities: {}\nset: {a.b: " + "[" * (depth - 2) + "]" * (depth - 2) + "}\n"
+
+    value = dg.files.parse(nested(MAX_DEPTH))["set"]["a.b"]
+    for _ in range(MAX_DEPTH - 3):
+        value = value[0]
+    assert value == []
+    assert "nested more than" in str(refused(dg.files.parse, nested(MAX_DEPTH + 1)))
+
+
+@pytest.mark.parametrize("loader", ["libyaml", "python"])
+@pytest.mark.parametrize("item", ["1", "a", "!!str a", "[]"])
+def test_a_file_of_too_many_values_is_refused_as_it_is_composed(item, loader, monkeypatch):
+    from dgraph.files import source
+
+    monkeypatch.setattr(source, "MAX_NODES", 1000)
+    if loader == "python":
+        monkeypatch.setattr(source, "_SAFE_LOADER", source.PythonLoader)
+    text = "entities: {}\nname: [" + f"{item}, " * 1010 + "]\n"
+    error = refused(loads, text)
+    assert "more than 1000 values" in str(error) and error.line in (None, 2)
+    assert len(dg.files.parse("entities: {}\nset: {a.b: [" + f"{item}, " * 900 + "]}\n")["set"]["a.b"]) == 900

@@ -46,6 +46,11 @@ can never construct objects or run code. Entity types come only from the registr
 error is a :class:`~dgraph.errors.GraphFileError` carrying the file, line and key of the file
 that wrote what is wrong.
 
+Bounds: only regular files are read (a FIFO, a device, a directory, a socket or a ``/proc``
+file of size 0 is refused, named by ``extends`` or by a ``path`` parameter alike); a graph file
+is at most ``MAX_BYTES``, ``MAX_DEPTH`` levels of lists and mappings deep and ``MAX_NODES``
+values, a data file at most ``MAX_DATA_BYTES``, so loading a file always ends, soon.
+
 The package, one concept a module: :mod:`~dgraph.files.source` (the text read safely, YAML
 converted to plain data with its line map, the places errors point at),
 :mod:`~dgraph.files.schema` (what one file may say), :mod:`~dgraph.files.composition` (a chain
@@ -58,9 +63,9 @@ from dgraph.files.build import check, load, loads
 from dgraph.files.composition import MAX_EXTENDS, RECORDER_NAME, SCALARS, declared_entities, parse
 from dgraph.files.paths import MAX_DATA_BYTES
 from dgraph.files.schema import NAME_RE, PLUG_PATTERN, PLUG_RE, SCHEMA, SIGNAL_RE, UNPLUG_PATTERN
-from dgraph.files.source import COMMAND_LINE, MAX_BYTES, MAX_NUMBER_CHARS, read_text
+from dgraph.files.source import COMMAND_LINE, MAX_BYTES, MAX_DEPTH, MAX_NODES, MAX_NUMBER_CHARS, read_text
 from dgraph.files.writing import dumps, save, to_plain
 
-__all__ = ["COMMAND_LINE", "MAX_BYTES", "MAX_DATA_BYTES", "MAX_EXTENDS", "MAX_NUMBER_CHARS", "NAME_RE", "PLUG_PATTERN",
-           "PLUG_RE", "RECORDER_NAME", "SCALARS", "SCHEMA", "SIGNAL_RE", "UNPLUG_PATTERN", "check", "declared_entities",
-           "dumps", "load", "loads", "parse", "read_text", "save", "to_plain"]
+__all__ = ["COMMAND_LINE", "MAX_BYTES", "MAX_DATA_BYTES", "MAX_DEPTH", "MAX_EXTENDS", "MAX_NODES", "MAX_NUMBER_CHARS",
+           "NAME_RE", "PLUG_PATTERN", "PLUG_RE", "RECORDER_NAME", "SCALARS", "SCHEMA", "SIGNAL_RE", "UNPLUG_PATTERN",
+           "check", "declared_entities", "dumps", "load", "loads", "parse", "read_text", "save", "to_plain"]
