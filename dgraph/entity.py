@@ -52,7 +52,9 @@ class Entity:
     * :meth:`observe` -- for entities with ``observes = True`` (recorders), called every tick
       after the control is computed and before states are committed; what it reads is kept
       in :meth:`commit_state`, so a failed tick leaves nothing behind;
-    * :meth:`check` -- extra problems reported by :meth:`Graph.validate`.
+    * :meth:`check` -- extra problems reported by :meth:`Graph.validate`;
+    * :meth:`constant_problem` -- what is wrong with a constant about to be set on an input,
+      beyond its spec (a length that depends on what is plugged), refused where it is set.
     """
 
     type_name: ClassVar[str] = "Entity"
@@ -200,6 +202,11 @@ class Entity:
 
     def observe(self, t: int) -> None:
         """Called every tick for entities with ``observes = True``."""
+
+    def constant_problem(self, name: str, value: Any) -> str | None:
+        """What is wrong with ``value`` (coerced to its spec) as the constant of input ``name``,
+        or None (override). ``inp.set`` refuses it with a :class:`SpecError` naming the input."""
+        return None
 
     def check(self) -> list[str]:
         """Problems :meth:`Graph.validate` should report for this entity (override)."""

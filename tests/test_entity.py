@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 import dgraph as dg
@@ -112,3 +113,19 @@ def test_dt_from_param_or_graph():
     assert g.add(sin("s", amplitude=1.0, frequency=1.0)).dt == 0.02
     with pytest.raises(dg.DGraphError, match="no dt"):
         sin("x", amplitude=1.0, frequency=1.0).dt
+
+
+def test_constant_problem_refuses_a_constant_where_it_is_set():
+    class Pair(dg.Entity):
+        """``pair`` takes two values or a scalar (a rule its spec, any shape, cannot say)."""
+
+        pair = dg.Input(default=0.0)
+
+        def constant_problem(self, name, value):
+            return None if np.shape(value) in ((), (2,)) else f"expected a scalar or 2 values, got {np.shape(value)}"
+
+    e = Pair("e")
+    e.pair.set([1.0, 2.0])
+    with pytest.raises(dg.SpecError, match=r"^e\.pair: expected a scalar or 2 values, got \(3,\)$") as caught:
+        e.pair.set([1.0, 2.0, 3.0])
+    assert (caught.value.entity, caught.value.signal) == ("e", "pair") and e.pair.value.tolist() == [1.0, 2.0]

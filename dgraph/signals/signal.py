@@ -585,6 +585,7 @@ class Input(Signal):
     :class:`~dgraph.errors.UnpluggedInputError` naming ``entity.signal``. ``minimum`` bounds the
     constants (and the default) from below, element by element (:class:`~dgraph.signals.spec.Spec`):
     a value below it is refused when it is set; what arrives through a plug is its reader's to check.
+    The entity's :meth:`~dgraph.Entity.constant_problem` refuses what depends on more than the spec.
     """
 
     __slots__ = ("_has_value", "_set_time", "_source", "_subs", "_value", "default", "is_set")
@@ -638,6 +639,9 @@ class Input(Signal):
         if self.entity is None:
             raise self._unbound()
         coerced = _coerce(self, value)
+        problem = self.entity.constant_problem(self.name, coerced)
+        if problem is not None:
+            raise SpecError(f"{self.full_name}: {problem}", entity=self.entity.name, signal=self.name)
         if self._source is not None:
             self.unplug()
         self._value = coerced

@@ -2,16 +2,22 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import dgraph as dg
 from dgraph.entities.features import AngularMomentum, CenterOfMass, FramePose, JointPosture
+from dgraph.entities.features.feature import feature_rows
+from dgraph.entities.operators import Constant
 from dgraph.entities.robot import RobotModel, load_model
 from dgraph.entities.tasks import Task
+from dgraph.files import check
 
 EPS = 1e-6
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def robot_graph(q, v):
@@ -144,12 +150,43 @@ def test_task_gain_errors_and_critical_damping():
     task.kp.set(16.0)
     f = g["com"].feature(0)
     assert np.allclose(task.desired_acceleration(0), -16.0 * f.error - 8.0 * f.error_velocity)
-    task.kp.set(np.ones(4))
-    with pytest.raises(dg.DGraphError, match=r"task\.kp.*scalar or 3 values"):
+    with pytest.raises(dg.SpecError, match=r"task\.kp: expected a scalar or 3 values, one per row of its feature "
+                                           r"com\.feature, got 4 values"):
+        task.kp.set(np.ones(4))  # refused where it is set: a graph file's set names its line
+    with pytest.raises(dg.SpecError, match=r"task\.kp: must be >= 0, got -1\.0"):
+        task.kp.set(-1.0)
+    with pytest.raises(dg.SpecError, match=r"task\.weight: must be >= 0"):
+        task.weight.set(np.array([1.0, -1.0, 1.0]))
+    assert task.kp.value == 16.0 and task.weight.value == 1.0
+    g.add(Constant("four", value=np.ones(4)), Constant("negative", value=-1.0))
+    g.plug("four.output", "task.kp")  # what arrives through a plug is checked at each tick
+    with pytest.raises(dg.DGraphError, match=r"task\.kp at tick 0: expected a scalar or 3 values"):
         task.equation(0)
-    task.kp.set(-1.0)
-    with pytest.raises(dg.DGraphError, match=r"task\.kp must be >= 0"):
+    g.plug("negative.output", "task.kp")
+    with pytest.raises(dg.DGraphError, match=r"task\.kp must be >= 0 at tick 0"):
         task.equation(0)
+
+
+@pytest.mark.parametrize("make", [lambda: CenterOfMass("f", mask="101"), lambda: FramePose("f", frame="base_link",
+                                  mask="000111"), lambda: JointPosture("f", joints=["torso_1_joint", "torso_2_joint"]),
+                                  lambda: AngularMomentum("f")], ids=["com", "frame", "posture", "momentum"])
+def test_a_task_knows_the_rows_of_its_feature_before_any_tick(make):
+    _, q, v = random_state(10)
+    g, _ = robot_graph(q, v)
+    feature, task = g.add(make(), Task("task"))
+    g.plug("robot.state", "f.robot")
+    if "reference_position" in feature.inputs:
+        feature.reference_position.set(np.zeros(3))
+    assert feature_rows(task.feature) is None  # nothing plugged yet
+    task.kd.set(np.ones(7))  # set before the feature is plugged: reported by the graph's check
+    g.plug("f.feature", "task.feature")
+    rows = feature_rows(task.feature)
+    assert feature.feature.count == 0 and rows == len(feature.feature(0).error)
+    task.kp.set(np.arange(rows, dtype=float))
+    assert g.problems() == [f"task: input kd: expected a scalar or {rows} values, one per row of its feature "
+                            "f.feature, got 7 values"]
+    task.kd.set(2.0)
+    assert g.problems() == []
 
 
 def test_gains_follow_a_producer_that_reuses_its_buffer():
@@ -239,3 +276,15 @@ def test_a_contiguous_mask_selects_views_and_the_reference_orientation_follows_i
     assert np.shares_memory(posture.feature(0).jacobian, posture.feature(3).jacobian)  # one constant selection
     with pytest.raises(ValueError, match="read-only"):
         posture.feature(3).drift[0] = 1.0
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("posture_task.kp: [1, 2, 3]", "posture_task.kp: expected a scalar or 32 values, one per row of its feature "
+                                   "posture.feature, got 3 values"),
+    ("com_task.weight: -1.0", "com_task.weight: must be >= 0, got -1.0")])
+def test_a_graph_file_setting_a_gain_that_does_not_fit_is_refused_at_its_line(setting, message, tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(f"extends: {ROOT / 'graphs' / 'talos_standing.yaml'}\nname: bad\nset:\n  {setting}\n")
+    with pytest.raises(dg.GraphFileError) as caught:
+        check(path)  # what `dgraph check` runs: it no longer says OK to what `run` refuses at tick 0
+    assert str(caught.value) == f"{path}:4 [set.{setting.split(':')[0]}]: {message}"

@@ -26,9 +26,10 @@ class Feature(dg.Entity, abc.ABC):
 
     Input: ``robot`` (the ``state`` output of a :class:`~dgraph.entities.robot.RobotModel`).
     Outputs: ``feature`` (a :class:`FeatureValue`, what a task plugs), ``error`` (``x (-) x*``)
-    and ``error_velocity`` (for plots). Subclasses set ``self.size`` (rows after the mask)
-    and ``self.rows`` (the :data:`Rows` of :meth:`evaluate`'s value that the mask keeps) in
-    ``configure``.
+    and ``error_velocity`` (for plots). Subclasses set ``self.size`` (rows after the mask,
+    known before any tick: tasks check the lengths of their gains against it,
+    :func:`feature_rows`) and ``self.rows`` (the :data:`Rows` of :meth:`evaluate`'s value that
+    the mask keeps) in ``configure``.
     """
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
@@ -51,3 +52,13 @@ class Feature(dg.Entity, abc.ABC):
     def error_velocity(self, t: int) -> np.ndarray:
         """``x_dot - x_dot*``."""
         return self.feature(t).error_velocity
+
+
+def feature_rows(inp: dg.Input) -> int | None:
+    """The number of rows of the feature plugged into ``inp`` (a task's ``feature`` input), known
+    before any tick: the ``size`` of the :class:`Feature` whose ``feature`` output is plugged;
+    None if nothing is plugged or the source is not a Feature's ``feature``."""
+    source = inp.source
+    if source is None or source.name != "feature" or not isinstance(source.entity, Feature):
+        return None
+    return source.entity.size

@@ -7,7 +7,12 @@ import numpy as np
 import dgraph as dg
 from dgraph.control.equation import TaskEquation
 from dgraph.control.feature import FeatureValue
+from dgraph.entities.constants import constant_problems, per_row_problem
+from dgraph.entities.features.feature import feature_rows
 from dgraph.entities.tasks.gains import Gains
+
+GAINS = ("kp", "kd", "weight")
+"""The inputs of a Task that take a scalar or one value per row of its feature."""
 
 
 @dg.register
@@ -27,7 +32,9 @@ class Task(dg.Entity):
     Parameters: ``critical_damping`` (when true, ``Kd = 2 sqrt(Kp)`` and there is no ``kd``
     input).
     Inputs: ``feature`` (a feature's ``feature`` output), ``kp``, ``kd`` (scalar or one gain
-    per row, >= 0), ``weight`` (scalar or per row, >= 0; default 1).
+    per row, >= 0), ``weight`` (scalar or per row, >= 0; default 1). A constant's sign is checked
+    when it is set, its length too once the feature is plugged (else by :meth:`check`); values
+    that arrive through a plug are checked at each tick.
     Outputs: ``equation`` (:class:`TaskEquation`, plugged into a solver),
     ``desired_acceleration`` (``x_ddot_des``), ``proportional_gains`` and ``derivative_gains``
     (``Kp``, ``Kd`` as vectors of the feature's size).
@@ -36,15 +43,24 @@ class Task(dg.Entity):
     critical_damping = dg.Param(False, kind="bool", doc="use Kd = 2 sqrt(Kp) instead of a kd input")
 
     feature = dg.Input(dtype=FeatureValue, doc="the feature's value (error, rate, Jacobian, drift)")
-    kp = dg.Input(default=0.0, doc="proportional gain (scalar or per row)")
-    weight = dg.Input(default=1.0, doc="task weight (scalar or per row)")
+    kp = dg.Input(default=0.0, minimum=0.0, doc="proportional gain (scalar or per row)")
+    weight = dg.Input(default=1.0, minimum=0.0, doc="task weight (scalar or per row)")
 
     def configure(self) -> None:
         """Declare ``kd`` unless the damping is critical."""
         if not self.critical_damping:
-            self.declare("kd", dg.Input(default=0.0, doc="derivative gain (scalar or per row)"))
+            self.declare("kd", dg.Input(default=0.0, minimum=0.0, doc="derivative gain (scalar or per row)"))
         self._gain_vectors = Gains(self)
         self._critical: tuple[np.ndarray, np.ndarray] | None = None
+
+    def constant_problem(self, name: str, value: object) -> str | None:
+        """A gain or weight must be a scalar or one value per row of the plugged feature."""
+        rows = feature_rows(self.feature) if name in GAINS else None
+        return None if rows is None else per_row_problem(value, rows, f"its feature {self.feature.source.full_name}")
+
+    def check(self) -> list[str]:
+        """The constant gains and weight fit the plugged feature (set before it was plugged)."""
+        return constant_problems(self)
 
     def _critical_kd(self, kp: np.ndarray) -> np.ndarray:
         """``Kd = 2 sqrt(Kp)``, computed again only for a new ``kp`` vector."""
