@@ -11,15 +11,15 @@ import numpy as np
 import dgraph as dg
 
 
-def per_row_problem(value: Any, rows: int | None, of: str) -> str | None:
+def per_row_problem(value: Any, rows: int | None, each: str) -> str | None:
     """What is wrong with the constant ``value`` of an input that takes a scalar or ``rows``
-    values (``of`` says what the rows are, e.g. ``"its feature posture.feature"``), or None;
+    values (``each`` names one of them, e.g. ``"row of its feature posture.feature"``), or None;
     None too when ``rows`` is not known (nothing plugged yet)."""
     shape = np.shape(value)
     if rows is None or shape in ((), (rows,)):
         return None
     got = f"{shape[0]} values" if len(shape) == 1 else f"shape {shape}"
-    return f"expected a scalar or {rows} values, one per row of {of}, got {got}"
+    return f"expected a scalar or {rows} values, one per {each}, got {got}"
 
 
 def constant_problems(entity: dg.Entity) -> list[str]:

@@ -50,3 +50,14 @@ def test_the_error_and_the_motion_rows_are_their_definitions():
     rhs = -np.array([30.0, 31.0, 32.0, 33.0, 34.0, 35.0]) * error - 11.0 * frame.velocity - frame.drift
     np.testing.assert_allclose(contact.motion_rhs, rhs, atol=1e-12)
     assert contact.jacobian is frame.jacobian and contact.rotation is rotation
+
+
+def test_the_gains_are_checked_where_they_are_set():
+    foot = Contact6d("foot", frame="left_sole_link")
+    foot.kd.set(np.ones(6))
+    with pytest.raises(dg.SpecError, match=r"foot\.kp: expected a scalar or 6 values, one per motion row "
+                                           r"\(x y z rx ry rz, contact frame\), got 3 values"):
+        foot.kp.set([30.0, 30.0, 30.0])
+    with pytest.raises(dg.SpecError, match=r"foot\.kd: must be >= 0"):
+        foot.kd.set([11.0, 11.0, 11.0, -11.0, 11.0, 11.0])
+    assert foot.kp.value == 0.0 and foot.kd.value.tolist() == [1.0] * 6

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import dgraph as dg
+from dgraph.entities.operators import Constant
 from dgraph.entities.references import Sinusoid
 from dgraph.entities.tasks import ForceTask
 
@@ -89,13 +90,17 @@ def test_inactive_resets_the_integral_and_outputs_the_reference():
 
 
 def test_wrench_size_and_vector_gains():
-    _, task = task_graph(size=6, integral_limit=100.0)
+    g, task = task_graph(size=6, integral_limit=100.0)
     task.reference.set(np.arange(6.0))
     task.measured.set(np.zeros(6))
     task.p_gain.set([1.0, 0.0, 2.0, 0.0, 0.5, 0.0])
     np.testing.assert_allclose(task.force(0), np.arange(6.0) * [2.0, 1.0, 3.0, 1.0, 1.5, 1.0])
-    task.p_gain.set([1.0, 2.0, 3.0])  # 3 gains for a wrench
-    with pytest.raises(dg.SpecError, match="ft.p_gain at tick 0: expected a scalar or 6 values"):
+    with pytest.raises(dg.SpecError, match=r"ft\.p_gain: expected a scalar or 6 values, one per axis of the force, "
+                                           r"got 3 values"):
+        task.p_gain.set([1.0, 2.0, 3.0])  # 3 gains for a wrench, refused where they are set
+    g.add(Constant("three", value=[1.0, 2.0, 3.0]))
+    g.plug("three.output", "ft.p_gain")  # through a plug: checked at each tick
+    with pytest.raises(dg.SpecError, match=r"ft\.p_gain at tick 0: expected a scalar or 6 values"):
         task.force(0)
 
 
@@ -104,7 +109,11 @@ def test_a_negative_gain_names_the_entity_and_signal(gain):
     g, task = task_graph()
     task.reference.set(np.zeros(3))
     task.measured.set(np.zeros(3))
-    getattr(task, gain).set([1.0, -0.1, 1.0])
+    with pytest.raises(dg.SpecError, match=rf"ft\.{gain}: must be >= 0") as info:
+        getattr(task, gain).set([1.0, -0.1, 1.0])  # a constant: where it is set
+    assert info.value.entity == "ft" and info.value.signal == gain
+    g.add(Constant("negative", value=[1.0, -0.1, 1.0]))
+    g.plug("negative.output", f"ft.{gain}")  # through a plug: at the tick
     with pytest.raises(dg.SpecError, match=rf"ft\.{gain} must be >= 0") as info:
         g.step() if gain == "i_gain" else task.force(0)
     assert info.value.entity == "ft" and info.value.signal == gain

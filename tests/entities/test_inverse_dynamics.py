@@ -212,9 +212,8 @@ def test_wrong_inputs_are_named():
     graph["solver"].com_task.set(type(bad)(bad.matrix[:2], bad.vector, bad.weight))
     with pytest.raises(Exception, match=r"solver\.com_task at tick 0: 2 rows but a vector of shape \(3,\)"):
         graph["solver"].tau(0)
-    graph["left_foot"].kp.set(-30.0)
-    with pytest.raises(Exception, match=r"left_foot\.kp must be >= 0"):
-        graph["left_foot"].contact(0)
+    with pytest.raises(dg.SpecError, match=r"left_foot\.kp: must be >= 0"):  # refused where it is set
+        graph["left_foot"].kp.set(-30.0)
 
 
 def test_a_real_solver_failure_is_not_sticky():

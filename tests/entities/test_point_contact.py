@@ -179,3 +179,13 @@ def test_a_frame_missing_from_the_model_is_reported(model):
     assert any("has no frame 'left_tool_tip'" in p for p in g.problems())
     with pytest.raises(dg.ParamError, match="tool: the robot model has no frame 'left_tool_tip'"):
         g["tool"].contact(0)
+
+
+def test_the_gains_are_checked_where_they_are_set():
+    tool = PointContact("tool", frame="left_tool_tip")
+    tool.kp.set([1.0, 2.0, 3.0])
+    with pytest.raises(dg.SpecError, match=r"tool\.kp: expected a scalar or 3 values, one per axis \(x y z, world\), "
+                                           r"got 6 values"):
+        tool.kp.set(np.ones(6))
+    with pytest.raises(dg.SpecError, match=r"tool\.kd: must be >= 0, got -1\.0"):
+        tool.kd.set(-1.0)

@@ -8,6 +8,7 @@ import pinocchio as pin
 import pytest
 
 import dgraph as dg
+from dgraph.entities.operators import Constant
 from dgraph.entities.robot import RobotModel
 from dgraph.entities.stabilizers import DcmAdmittance, ZmpEstimator, lipm_zmp, natural_frequency, zero_moment_point
 
@@ -171,11 +172,16 @@ class PositionControlledLipm(dg.Device):
         self.zmp.commit(t_next)
 
 
-def pendulum_run(seconds: float, stabilised: bool = True, **gains) -> np.ndarray:
-    """CoM x of every tick of a pushed pendulum (0.2 m/s^2, i.e. 18 N on TALOS)."""
+def pendulum_run(seconds: float, stabilised: bool = True, plugged: dict[str, float] | None = None,
+                 **gains) -> np.ndarray:
+    """CoM x of every tick of a pushed pendulum (0.2 m/s^2, i.e. 18 N on TALOS); ``gains`` are
+    set, ``plugged`` ones come from Constant entities."""
     graph = dg.Graph(dt=0.001)
     plant = graph.add(PositionControlledLipm("plant", push=0.2))
     entity = graph.add(stabilizer(**gains))
+    for name, value in (plugged or {}).items():
+        graph.add(Constant(f"{name}_source", value=value))
+        graph.plug(f"{name}_source.output", f"stabilizer.{name}")
     for name in ("com", "com_velocity", "zmp"):
         graph.plug(f"plant.{name}", f"stabilizer.{name}")
     for name in ("com_reference", "com_velocity_reference", "com_acceleration_reference"):
@@ -200,7 +206,11 @@ def test_the_stabilised_pendulum_absorbs_a_push_and_returns_to_its_reference():
 
 
 def test_a_reversed_admittance_makes_the_pendulum_diverge():
-    com = pendulum_run(3.0, kp_admittance=-12.0)
+    """The sign of Eq. 2.31 is the one implemented: a negative gain, refused as a constant (the
+    gains are >= 0 where they are set), diverges when a plug feeds it."""
+    with pytest.raises(dg.SpecError, match=r"stabilizer\.kp_admittance: must be >= 0, got -12\.0"):
+        stabilizer(kp_admittance=-12.0)
+    com = pendulum_run(3.0, plugged={"kp_admittance": -12.0})
     assert np.abs(com[-1]) > 1.0
 
 

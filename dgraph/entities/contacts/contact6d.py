@@ -8,6 +8,7 @@ import pinocchio as pin
 
 import dgraph as dg
 from dgraph.control.contact import ContactConstraint
+from dgraph.entities.constants import per_row_problem
 from dgraph.entities.contacts.anchoring import AnchoredContact
 from dgraph.entities.contacts.wrench_cone import corner_force_metric, wrench_cone
 from dgraph.entities.robot.robot_state import LOCAL, FrameReader, RobotState
@@ -127,8 +128,8 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
                       doc="force variables: the 4 corner forces, or the 6D wrench in their wrench cone")
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
-    kp = dg.Input(default=0.0, doc="drift-correction stiffness (scalar or 6)")
-    kd = dg.Input(default=0.0, doc="drift-correction damping (scalar or 6)")
+    kp = dg.Input(default=0.0, minimum=0.0, doc="drift-correction stiffness (scalar or 6)")
+    kd = dg.Input(default=0.0, minimum=0.0, doc="drift-correction damping (scalar or 6)")
 
     def configure(self) -> None:
         """Precompute the force generator and the friction rows."""
@@ -148,6 +149,9 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
         self._lower, self._upper = self.friction_bounds(len(cone))
         self._anchor: tuple[pin.SE3, list[list[float]], list[float]] | None = None  # the anchor taken apart
 
+    def constant_problem(self, name: str, value: object) -> str | None:
+        """``kp`` and ``kd`` are a scalar or one gain per motion row."""
+        return per_row_problem(value, 6, "motion row (x y z rx ry rz, contact frame)") if name in ("kp", "kd") else None
     def here(self, t: int) -> pin.SE3:
         """The frame's placement at ``t`` (a copy)."""
         state = self.robot(t)

@@ -6,6 +6,7 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.control.contact import ContactConstraint
+from dgraph.entities.constants import per_row_problem
 from dgraph.entities.contacts.anchoring import AnchoredContact
 from dgraph.entities.robot.robot_state import WORLD, FrameReader, RobotState
 from dgraph.entities.tasks.gains import Gains
@@ -62,8 +63,8 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
     force_weight = dg.Param(1e-5, kind="float", minimum=0.0, doc="weight of ||f - f*||^2 in the cost")
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
-    kp = dg.Input(default=0.0, doc="anchor stiffness (scalar or 3)")
-    kd = dg.Input(default=0.0, doc="anchor damping (scalar or 3)")
+    kp = dg.Input(default=0.0, minimum=0.0, doc="anchor stiffness (scalar or 3)")
+    kd = dg.Input(default=0.0, minimum=0.0, doc="anchor damping (scalar or 3)")
     force_reference = dg.Input(shape=(3,), default=np.zeros(3), doc="f*: desired force on the robot (N, world)")
 
     def configure(self) -> None:
@@ -78,6 +79,9 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
         self._rotation.flags.writeable = False
         self._gains = Gains(self)
 
+    def constant_problem(self, name: str, value: object) -> str | None:
+        """``kp`` and ``kd`` are a scalar or one gain per axis."""
+        return per_row_problem(value, 3, "axis (x y z, world)") if name in ("kp", "kd") else None
     def here(self, t: int) -> np.ndarray:
         """The point at ``t`` (a copy)."""
         state = self.robot(t)

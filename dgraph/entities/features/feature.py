@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import abc
+from typing import Any
 
 import numpy as np
 
 import dgraph as dg
 from dgraph.control.feature import FeatureValue
+from dgraph.entities.constants import per_row_problem
 from dgraph.entities.robot.robot_state import RobotState
 from dgraph.entities.selection import Rows, contiguous
 
@@ -62,3 +64,11 @@ def feature_rows(inp: dg.Input) -> int | None:
     if source is None or source.name != "feature" or not isinstance(source.entity, Feature):
         return None
     return source.entity.size
+
+
+def per_row_of_feature_problem(inp: dg.Input, value: Any) -> str | None:
+    """What is wrong with the constant ``value`` of a gain that takes a scalar or one value per
+    row of the feature plugged into ``inp`` (:func:`per_row_problem`), or None; None too while the
+    rows are not known (:func:`feature_rows`)."""
+    rows = feature_rows(inp)
+    return None if rows is None else per_row_problem(value, rows, f"row of its feature {inp.source.full_name}")

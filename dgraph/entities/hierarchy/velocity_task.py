@@ -8,6 +8,8 @@ import dgraph as dg
 from dgraph.control.feature import FeatureValue
 from dgraph.control.rows import RowBlock
 from dgraph.entities.activation import Activatable
+from dgraph.entities.constants import constant_problems
+from dgraph.entities.features.feature import per_row_of_feature_problem
 from dgraph.entities.hierarchy.adaptive_gain import adaptive_gain
 from dgraph.entities.robot.robot_state import RobotState
 from dgraph.entities.tasks.gains import Gains
@@ -46,12 +48,26 @@ class VelocityTask(Activatable, dg.Entity):
     def configure(self) -> None:
         """Declare the gain inputs."""
         if self.adaptive:
-            self.declare("gain_at_zero", dg.Input(shape=(), default=1.0, doc="l0: the gain at e = 0 (1/s)"))
-            self.declare("gain_at_infinity", dg.Input(shape=(), default=1.0, doc="linf: the gain far away (1/s)"))
-            self.declare("gain_slope", dg.Input(shape=(), default=0.0, doc="l0': minus the slope at e = 0"))
+            for name, default, doc in (("gain_at_zero", 1.0, "l0: the gain at e = 0 (1/s)"),
+                                       ("gain_at_infinity", 1.0, "linf: the gain far away (1/s)"),
+                                       ("gain_slope", 0.0, "l0': minus the slope at e = 0")):
+                self.declare(name, dg.Input(shape=(), default=default, minimum=0.0, doc=doc))
         else:
-            self.declare("gain", dg.Input(default=1.0, doc="lambda (scalar or per row, 1/s)"))
+            self.declare("gain", dg.Input(default=1.0, minimum=0.0, doc="lambda (scalar or per row, 1/s)"))
         self._gains = Gains(self)
+
+    def constant_problem(self, name: str, value: object) -> str | None:
+        """A constant ``gain`` is a scalar or one per row of the plugged feature."""
+        return per_row_of_feature_problem(self.feature, value) if name == "gain" else None
+
+    def check(self) -> list[str]:
+        """The constant gain fits the plugged feature; constant adaptive gains have l0 >= linf."""
+        found = constant_problems(self)
+        if self.adaptive and self.gain_at_zero.source is None and self.gain_at_infinity.source is None \
+                and self.gain_at_zero.value < self.gain_at_infinity.value:
+            found.append(f"the adaptive gain needs gain_at_zero >= gain_at_infinity, got {self.gain_at_zero.value} "
+                         f"< {self.gain_at_infinity.value}")
+        return found
 
     def _feature(self, t: int) -> FeatureValue:
         return self.feature(t)

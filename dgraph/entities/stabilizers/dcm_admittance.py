@@ -43,7 +43,7 @@ class DcmAdmittance(dg.Entity):
     height = dg.Param(0.0, kind="float", doc="ground height (m)")
     max_offset = dg.Param(0.05, kind="float", minimum=0.0, doc="bound of the CoM correction per axis (m)")
     integral_limit = dg.Param(0.1, kind="float", minimum=0.0, doc="bound of the DCM error integral (m s)")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     reference_position = dg.Input(shape=(3,), doc="planned CoM c_ref")
     reference_velocity = dg.Input(shape=(3,), default=np.zeros(3), doc="planned CoM velocity")
@@ -51,10 +51,10 @@ class DcmAdmittance(dg.Entity):
     com = dg.Input(shape=(3,), doc="estimated CoM")
     com_velocity = dg.Input(shape=(3,), doc="estimated CoM velocity")
     zmp = dg.Input(shape=(3,), doc="measured ZMP")
-    kp_dcm = dg.Input(shape=(), default=8.0, doc="K_Pdcm (1/s)")
-    ki_dcm = dg.Input(shape=(), default=1.0, doc="K_Idcm (1/s²)")
-    kz_dcm = dg.Input(shape=(), default=1.0, doc="K_Zdcm (1/s)")
-    kp_admittance = dg.Input(shape=(), default=12.0, doc="K_Padm (1/s²)")
+    kp_dcm = dg.Input(shape=(), default=8.0, minimum=0.0, doc="K_Pdcm (1/s)")
+    ki_dcm = dg.Input(shape=(), default=1.0, minimum=0.0, doc="K_Idcm (1/s²)")
+    kz_dcm = dg.Input(shape=(), default=1.0, minimum=0.0, doc="K_Zdcm (1/s)")
+    kp_admittance = dg.Input(shape=(), default=12.0, minimum=0.0, doc="K_Padm (1/s²)")
 
     offset = dg.State(shape=(2,), initial=np.zeros(2), doc="Δc")
     offset_velocity = dg.State(shape=(2,), initial=np.zeros(2), doc="Δċ")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 import dgraph as dg
+from dgraph.entities.constants import per_row_problem
 from dgraph.entities.tasks.gains import Gains
 
 
@@ -30,12 +31,12 @@ class ForceTask(dg.Entity):
     has_state = True
     size = dg.Param(3, kind="int", minimum=1, maximum=6, doc="3 (force) or 6 (wrench)")
     integral_limit = dg.Param(20.0, kind="float", minimum=0.0, doc="largest |I_F integral| per axis (N)")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     reference = dg.Input(shape=("size",), doc="F*: desired force on the robot")
     measured = dg.Input(shape=("size",), doc="F_ext: measured force on the robot")
-    p_gain = dg.Input(default=0.0, doc="P_F (scalar or per axis)")
-    i_gain = dg.Input(default=0.0, doc="I_F in 1/s (scalar or per axis)")
+    p_gain = dg.Input(default=0.0, minimum=0.0, doc="P_F (scalar or per axis)")
+    i_gain = dg.Input(default=0.0, minimum=0.0, doc="I_F in 1/s (scalar or per axis)")
     active = dg.Input(shape=(), dtype="bool", default=True, doc="false: reset the integral, force = F*")
     integral = dg.State(shape=("size",), doc="integral of e_f (N s)")
 
@@ -43,6 +44,9 @@ class ForceTask(dg.Entity):
         """Gain conversion."""
         self._gains = Gains(self)
 
+    def constant_problem(self, name: str, value: object) -> str | None:
+        """The gains are a scalar or one per axis of the force (or wrench)."""
+        return per_row_problem(value, self.size, "axis of the force") if name in ("p_gain", "i_gain") else None
     def reset(self) -> None:
         """Zero integral."""
         self.integral.set(np.zeros(self.size), 0)

@@ -7,8 +7,8 @@ import numpy as np
 import dgraph as dg
 from dgraph.control.equation import TaskEquation
 from dgraph.control.feature import FeatureValue
-from dgraph.entities.constants import constant_problems, per_row_problem
-from dgraph.entities.features.feature import feature_rows
+from dgraph.entities.constants import constant_problems
+from dgraph.entities.features.feature import per_row_of_feature_problem
 from dgraph.entities.tasks.gains import Gains
 
 GAINS = ("kp", "kd", "weight")
@@ -55,8 +55,7 @@ class Task(dg.Entity):
 
     def constant_problem(self, name: str, value: object) -> str | None:
         """A gain or weight must be a scalar or one value per row of the plugged feature."""
-        rows = feature_rows(self.feature) if name in GAINS else None
-        return None if rows is None else per_row_problem(value, rows, f"its feature {self.feature.source.full_name}")
+        return per_row_of_feature_problem(self.feature, value) if name in GAINS else None
 
     def check(self) -> list[str]:
         """The constant gains and weight fit the plugged feature (set before it was plugged)."""

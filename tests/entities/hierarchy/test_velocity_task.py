@@ -50,9 +50,27 @@ def test_adaptive_task_uses_the_gain_of_the_error_norm():
     feature.reference_position.set(feature.reference_position(0) + np.array([0.03, 0.04, 0.0]))
     expected = adaptive_gain(0.05, 8.0, 2.0, 30.0)
     np.testing.assert_allclose(task.gain_value(0), [expected, expected], rtol=1e-9)
-    task.gain_at_infinity.set(9.0)  # linf > l0
-    with pytest.raises(dg.SpecError, match="adaptive_task"):
+    task.gain_at_infinity.set(9.0)  # linf > l0: a relation of two constants, reported by the graph's check
+    assert g.problems() == ["adaptive_task: the adaptive gain needs gain_at_zero >= gain_at_infinity, got 8.0 < 9.0"]
+    with pytest.raises(dg.SpecError, match="adaptive_task"):  # and refused at the tick
         task.gain_value(0)
+    with pytest.raises(dg.SpecError, match=r"adaptive_task\.gain_slope: must be >= 0"):
+        task.gain_slope.set(-1.0)
+
+
+def test_a_constant_gain_is_checked_against_the_rows_of_the_feature_where_it_is_set():
+    g = build()
+    task = g["com_xy"]
+    with pytest.raises(dg.SpecError, match=r"com_xy\.gain: expected a scalar or 2 values, one per row of its feature "
+                                           r"com_xy_feature\.feature, got 3 values"):
+        task.gain.set([1.0, 2.0, 3.0])
+    with pytest.raises(dg.SpecError, match=r"com_xy\.gain: must be >= 0"):
+        task.gain.set(-1.0)
+    g.unplug("com_xy.feature")
+    task.gain.set([1.0, 2.0, 3.0])  # no feature plugged: its rows are not known yet
+    g.plug("com_xy_feature.feature", "com_xy.feature")
+    assert g.problems() == ["com_xy: input gain: expected a scalar or 2 values, one per row of its feature "
+                            "com_xy_feature.feature, got 3 values"]
 
 
 def test_a_wrong_feature_input_names_the_task():
