@@ -893,3 +893,36 @@ def test_a_file_of_too_many_values_is_refused_as_it_is_composed(item, loader, mo
     error = refused(loads, text)
     assert "more than 1000 values" in str(error) and error.line in (None, 2)
     assert len(dg.files.parse("entities: {}\nset: {a.b: [" + f"{item}, " * 900 + "]}\n")["set"]["a.b"]) == 900
+
+
+def test_check_locates_what_the_library_refuses_as_load_does(tmp_path, monkeypatch):
+    """A refusal without a place (here a GraphError, and a foreign ValueError, from a constant
+    that the graph refuses) is located at the file by check too, its cause chained."""
+    from dgraph.files import build
+
+    path = write(tmp_path, "graph.yaml", GOOD)
+    for error in (dg.GraphError("refused"), ValueError("odd")):
+        def refuse(*args, error=error):
+            raise error
+
+        monkeypatch.setattr(build, "_check_records", refuse)
+        for call in (dg.load, dg.files.check):
+            raised = refused(call, path)
+            assert raised.file == str(path) and raised.__cause__ is error, str(raised)
+
+
+def test_a_foreign_exception_of_a_constructor_is_chained_and_an_interrupt_is_not_caught(monkeypatch):
+    from dgraph.files import build
+
+    class Exploding(dg.Entity):
+        def configure(self):
+            raise self.error
+
+    monkeypatch.setattr(build, "get_type", lambda name: Exploding)
+    Exploding.error = ZeroDivisionError("boom")
+    error = refused(loads, "name: x\nentities:\n  e: {type: Exploding}\n")
+    assert error.line == 3 and "could not be built: ZeroDivisionError: boom" in str(error)
+    assert error.__cause__ is Exploding.error
+    Exploding.error = KeyboardInterrupt()
+    with pytest.raises(KeyboardInterrupt):
+        loads("name: x\nentities:\n  e: {type: Exploding}\n")

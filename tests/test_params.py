@@ -84,3 +84,12 @@ def test_bounds_apply_to_every_element_of_a_vector_or_a_list():
             gains.convert(bad, "e")
     with pytest.raises(dg.ParamError, match=r"within \[0, 9\]"):
         make("i", kind="int_list", minimum=0, maximum=9).convert([3, 10], "e")
+
+
+@pytest.mark.parametrize("type_name", sorted(n for n, cls in dg.entity_types().items() if "dt" in cls._param_decls))
+def test_every_dt_parameter_is_a_positive_period(type_name):
+    decl = dg.get_type(type_name)._param_decls["dt"]
+    assert decl.convert(None, "e") is None and decl.convert(0.002, "e") == 0.002  # None: the graph's dt
+    for bad in (0.0, -0.001):
+        with pytest.raises(dg.ParamError, match=r"e: parameter 'dt' must be within \[1e-06, "):
+            decl.convert(bad, "e")

@@ -33,15 +33,7 @@ def load(path: str | Path, overrides: dict[str, Any] | None = None) -> Graph:
 
 def loads(text: str, file: str = "<string>", overrides: dict[str, Any] | None = None) -> Graph:
     """Build a graph from graph-file text (see :func:`load`)."""
-    composition = compose(text, file, overrides)
-    try:
-        return _build(composition, file)
-    except GraphFileError:
-        raise
-    except DGraphError as exc:  # anything the library refused, located at the file level
-        raise GraphFileError(str(exc), file=file, entity=exc.entity, signal=exc.signal) from exc
-    except (ValueError, TypeError, OverflowError, MemoryError) as exc:  # a value no check foresaw
-        raise GraphFileError(f"could not build the graph: {type(exc).__name__}: {exc}", file=file) from exc
+    return _located_build(compose(text, file, overrides), file)
 
 
 def check(path: str | Path) -> tuple[Graph, list[str]]:
@@ -54,8 +46,21 @@ def check(path: str | Path) -> tuple[Graph, list[str]]:
     """
     refused: Refused = []
     file = str(path)
-    graph = _build(compose(read_text(path), file), file, refused)
+    graph = _located_build(compose(read_text(path), file), file, refused)
     return graph, [str(error) for _, error in refused] + graph.problems(reported={target for target, _ in refused})
+
+
+def _located_build(composition: Composition, file: str, refused: Refused | None = None) -> Graph:
+    """:func:`_build`, what the library (or a value no check foresaw) refuses without a place
+    located at the file: :func:`load` and :func:`check` give the same error."""
+    try:
+        return _build(composition, file, refused)
+    except GraphFileError:
+        raise
+    except DGraphError as exc:  # anything the library refused, located at the file level
+        raise GraphFileError(str(exc), file=file, entity=exc.entity, signal=exc.signal) from exc
+    except (ValueError, TypeError, OverflowError, MemoryError) as exc:  # a value no check foresaw
+        raise GraphFileError(f"could not build the graph: {type(exc).__name__}: {exc}", file=file) from exc
 
 
 def _build(composition: Composition, file: str, refused: Refused | None = None) -> Graph:
@@ -151,7 +156,7 @@ def _make_entity(name: str, spec: EntitySpec, settings: dict[str, Setting], robo
     except DGraphError as exc:
         raise blame.error(str(exc), exc) from None
     except Exception as exc:  # an entity constructor failing on odd values must not crash the loader
-        raise blame.error(f"{name} ({spec.type}) could not be built: {type(exc).__name__}: {exc}") from None
+        raise blame.error(f"{name} ({spec.type}) could not be built: {type(exc).__name__}: {exc}") from exc
 
 
 def _params(name: str, spec: EntitySpec, decls: dict[str, Param], settings: dict[str, Setting],

@@ -315,8 +315,8 @@ def _scalar(doc: Document, node: yaml.Node, path: tuple[Any, ...], loader: yaml.
         raise _node_error(doc, f"{_shortened(node.value)} is not a supported number", node, path)
     try:
         value = loader.construct_object(node)
-    except (ValueError, KeyError, IndexError, TypeError, OverflowError, yaml.YAMLError):
-        raise _node_error(doc, f"{node.value!r} is not a valid {node.tag.rsplit(':', 1)[-1]}", node, path) from None
+    except (ValueError, KeyError, IndexError, TypeError, OverflowError, yaml.YAMLError) as exc:
+        raise _node_error(doc, f"{node.value!r} is not a valid {node.tag.rsplit(':', 1)[-1]}", node, path) from exc
     too_large = (isinstance(value, float) and math.isinf(value) and node.value.lower().lstrip("+-") != ".inf") or (
         isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 2**63)
     if too_large:

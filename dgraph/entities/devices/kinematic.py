@@ -31,7 +31,7 @@ class KinematicDevice(dg.Device):
     model = dg.Param(None, kind="object", doc="example-robot-data robot name or pinocchio.Model")
     q0 = dg.Param(None, kind="vector", doc="initial configuration (default: neutral / zeros)")
     v0 = dg.Param(None, kind="vector", doc="initial velocity (default: zeros)")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     control = dg.Input(shape=("nv",), doc="commanded velocity or acceleration")
     q = dg.State(shape=("nq",), doc="configuration")

@@ -61,7 +61,7 @@ class ConfigurationIntegrator(dg.Entity):
     control_mode = dg.Param("velocity", kind="str", choices=("velocity", "acceleration"),
                             doc="velocity: integrate once (IK); acceleration: twice (TSID position)")
     sync_period = dg.Param(0, kind="int", minimum=0, doc="re-synchronise every N ticks (0: only at tick 0)")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     command = dg.Input(shape=("nv",), doc="the QP's velocity or acceleration")
     measured_q = dg.Input(shape=("nq",), doc="measured (estimated) configuration")

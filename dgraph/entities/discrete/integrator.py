@@ -18,7 +18,7 @@ class Integrator(dg.Entity):
     has_state = True
     size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
     initial = dg.Param(None, kind="vector", doc="initial value (default 0)")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     input = dg.Input(shape=state_shape, doc="the derivative")
     output = dg.State(shape=state_shape, doc="the integral")
 

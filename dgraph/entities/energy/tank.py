@@ -126,7 +126,7 @@ class EnergyTank(dg.Entity):
     inertia = dg.Param("per_task", kind="str", choices=("per_task", "stacked"), doc="Lambda per task or stacked")
     enabled = dg.Param(True, kind="bool", doc="false: compute and record, but leave the solver plain")
     clamp = dg.Param(True, kind="bool", doc="keep E in [E_min, E_max], summing the correction")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
     solution = dg.Input(dtype=QPSolution, doc="the solver's solution (tau, contacts, forces), read after the solve")

@@ -30,7 +30,7 @@ class ContactDetector(dg.Entity):
     off_force = dg.Param(2.0, kind="float", minimum=0.0, doc="normal force under which it is lost (N)")
     on_time = dg.Param(0.01, kind="float", minimum=0.0, doc="dwell before a contact is made (s)")
     off_time = dg.Param(0.05, kind="float", minimum=0.0, doc="dwell before a contact is lost (s)")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     force = dg.Input(shape=(3,), doc="measured force on the robot (N, world)")
     phase = dg.State(shape=(), dtype="int", initial=APPROACHING, doc="0 approaching, 1 in contact, 2 lost")

@@ -122,7 +122,7 @@ class FloatingBaseEstimator(dg.Entity):
                                 doc="complementary filter cutoff (Hz): kinematics below, accelerometer above")
     q0 = dg.Param(None, kind="vector", doc="initial configuration; only the base position q0[:3] is used "
                                            "(default: half-sitting with the soles at z = 0)")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     imu_orientation = dg.Input(shape=(4,), doc="quaternion [x, y, z, w] of the IMU frame in the world")
     imu_angular_velocity = dg.Input(shape=(3,), doc="gyro, IMU frame (rad/s)")

@@ -42,7 +42,7 @@ class MinimumJerk(dg.Entity):
     duration = dg.Param(kind="float", maximum=1e9, doc="duration of the move in s (> 0)")
     start = dg.Param(0.0, kind="float", minimum=0.0, maximum=1e9, doc="time at which the move starts, in s")
     initial = dg.Param(None, kind="vector", doc="initial value (default: the input current at start)")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     current = dg.Input(shape=lambda self: self.value_shape, doc="value sampled at the start tick")
     origin = dg.State(shape=lambda self: self.value_shape, doc="the initial value of the move, once started")

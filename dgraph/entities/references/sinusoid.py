@@ -33,7 +33,7 @@ class Sinusoid(dg.Entity):
     phase = dg.Param(0.0, kind="vector", doc="phase in rad (scalar or per component)")
     offset = dg.Param(0.0, kind="vector", doc="offset (scalar or per component)")
     ramp = dg.Param(0.0, kind="float", minimum=0.0, doc="fade-in duration of the amplitude in s (0: none)")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     def configure(self) -> None:
         """Broadcast the parameters to a common shape; a frequency and a phase shared by every

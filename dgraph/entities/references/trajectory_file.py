@@ -197,7 +197,7 @@ class TrajectoryFile(dg.Entity):
     layout = dg.Param("p", kind="str", choices=tuple(LAYOUTS), doc="CSV columns after time: p, pv or pva blocks")
     interpolation = dg.Param("cubic", kind="str", choices=("linear", "cubic"), doc="interpolation in time")
     start = dg.Param(0.0, kind="float", minimum=-1e9, maximum=1e9, doc="graph time (s) at which file time 0 is played")
-    dt = dg.Param(None, kind="float", doc="tick period in s (default: the graph's dt)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
 
     def configure(self) -> None:
         """Read and check the file; precompute what the interpolation needs."""
