@@ -40,6 +40,10 @@ def test_gain_scalar_diagonal_matrix(graph):
     assert np.allclose(g.output(0), [1.0, -2.0])
     g.gain.set([[0.0, 1.0], [1.0, 0.0]])
     assert np.allclose(g.output(0), [2.0, 1.0])
+    with pytest.raises(dg.SpecError, match=r"g\.gain: expected a scalar, \(2,\) or \(2, 2\), got shape \(3,\)"):
+        g.gain.set([1.0, 2.0, 3.0])  # refused where it is set, not at the tick
+    with pytest.raises(dg.SpecError, match=r"x\.gain: expected a scalar, got shape \(2,\)"):
+        graph.add(Gain("x")).gain.set([1.0, 2.0])
 
 
 def test_selector(graph):
@@ -58,7 +62,16 @@ def test_switch_evaluates_only_the_selected_input(graph):
     sw.selection.set(0)
     with pytest.raises(dg.UnpluggedInputError, match=r"sw\.in0"):
         sw.output(1)
-    sw.selection.set(7)
+    with pytest.raises(dg.SpecError, match=r"sw\.selection: expected 0\.\.1 \(one of in0\.\.in1\), got 7"):
+        sw.selection.set(7)
+
+    class Seven(dg.Entity):
+        @dg.output(shape=(), dtype="int", depends=())
+        def output(self, t):
+            return 7
+
+    graph.add(Seven("seven"))
+    graph.plug("seven.output", "sw.selection")  # through a plug: checked at the tick
     with pytest.raises(dg.ComputeError, match="selection = 7"):
         sw.output(2)
 
@@ -74,3 +87,7 @@ def test_saturation(graph):
     assert scalar.output(0) == 3.0
     scalar.upper.set(1.0)
     assert scalar.output(0) == 1.0
+    with pytest.raises(dg.SpecError, match=r"s\.lower: expected a scalar or \(3,\), got shape \(2,\)"):
+        s.lower.set([0.0, 0.0])
+    scalar.lower.set(2.0)  # above upper: a relation of two constants, reported by the graph's check
+    assert graph.problems() == ["x: lower 2.0 is above upper 1.0"]

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.operators.shape import vector_shape
+from dgraph.entities.operators.shape import shape_problem, vector_shape
 from dgraph.params import MAX_SIZE
 
 
@@ -23,6 +23,12 @@ class Gain(dg.Entity):
     size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
     input = dg.Input(shape=vector_shape, doc="the signal to scale")
     gain = dg.Input(shape=None, default=1.0, doc="scalar, diagonal (vector) or matrix gain")
+
+    def constant_problem(self, name: str, value: Any) -> str | None:
+        """A constant gain is a scalar, or (vectors) ``size`` values or a ``size x size`` matrix."""
+        if name != "gain":
+            return None
+        return shape_problem(value, [()] if self.size is None else [(), (self.size,), (self.size, self.size)])
 
     @dg.output(shape=vector_shape, depends=("input", "gain"))
     def output(self, t: int) -> Any:

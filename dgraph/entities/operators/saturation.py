@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.operators.shape import vector_shape
+from dgraph.entities.operators.shape import shape_problem, vector_shape
 from dgraph.params import MAX_SIZE
 
 
@@ -23,6 +23,19 @@ class Saturation(dg.Entity):
     input = dg.Input(shape=vector_shape)
     lower = dg.Input(shape=None, default=-np.inf, doc="lower bound (scalar or vector)")
     upper = dg.Input(shape=None, default=np.inf, doc="upper bound (scalar or vector)")
+
+    def constant_problem(self, name: str, value: Any) -> str | None:
+        """A constant bound is a scalar, or (vectors) ``size`` values."""
+        if name not in ("lower", "upper"):
+            return None
+        return shape_problem(value, [()] if self.size is None else [(), (self.size,)])
+
+    def check(self) -> list[str]:
+        """Constant bounds are in order (``lower <= upper``)."""
+        lower, upper = self.lower, self.upper
+        if lower.source is None and upper.source is None and np.any(np.asarray(lower.value) > upper.value):
+            return [f"lower {lower.value} is above upper {upper.value}"]
+        return []
 
     @dg.output(shape=vector_shape, depends=("input", "lower", "upper"))
     def output(self, t: int) -> Any:

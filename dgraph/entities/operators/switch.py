@@ -26,6 +26,12 @@ class Switch(dg.Entity):
         for i in range(self.n_inputs):
             self.declare(f"in{i}", dg.Input(shape=vector_shape))
 
+    def constant_problem(self, name: str, value: Any) -> str | None:
+        """A constant selection names one of the inputs."""
+        if name == "selection" and not 0 <= value < self.n_inputs:
+            return f"expected 0..{self.n_inputs - 1} (one of in0..in{self.n_inputs - 1}), got {value}"
+        return None
+
     @dg.output(shape=vector_shape, on_demand=True)
     def output(self, t: int) -> Any:
         """The selected input."""
