@@ -103,7 +103,8 @@ class Device(Entity):
             self.graph.step()
             return
         from dgraph.loop import run_after_hooks, transition
-        roles = {"devices": [self], "stateful": [self], "observers": [], "commit": [self], "periodic": []}
+        roles = {"devices": [self], "stateful": [self], "observers": [], "commit": [self], "periodic": [],
+                 "faults": self.fault_log}
         transition(roles, self._standalone_t)
         self._standalone_t += 1
         run_after_hooks([self], self._standalone_t)

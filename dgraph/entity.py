@@ -23,6 +23,7 @@ from collections.abc import Callable
 from typing import Any, ClassVar, TypeVar
 
 from dgraph.errors import DGraphError, ParamError
+from dgraph.faults import FaultLog
 from dgraph.params import REQUIRED, Param
 from dgraph.signals.clock import Clock
 from dgraph.signals.signal import Input, Output, Signal, State, structure_changed
@@ -211,6 +212,24 @@ class Entity:
     def check(self) -> list[str]:
         """Problems :meth:`Graph.validate` should report for this entity (override)."""
         return []
+
+    # -- faults -------------------------------------------------------------------------------
+    @property
+    def fault_log(self) -> FaultLog:
+        """Where this entity's faults go: its graph's log (an entity outside a graph has its own)."""
+        if self.graph is not None:
+            return self.graph.fault_log
+        own = self.__dict__.get("_own_fault_log")
+        if own is None:
+            own = self.__dict__["_own_fault_log"] = FaultLog()
+        return own
+
+    def report_fault(self, t: int, signal: str, cause: str, action: str, detail: str = "") -> None:
+        """Report that tick ``t`` is degraded: ``signal`` (a name of this entity's, or a full
+        ``entity.signal`` name) had ``cause``, and ``action`` was taken instead of failing
+        (see :mod:`dgraph.faults`)."""
+        name = signal if "." in signal.split("[")[0] else f"{self.name}.{signal}"
+        self.fault_log.report(t, name, cause, action, detail)
 
     # -- introspection ------------------------------------------------------------------------
     @property

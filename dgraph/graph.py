@@ -16,6 +16,7 @@ import networkx as nx
 
 from dgraph.entity import Entity
 from dgraph.errors import CycleError, GraphError, PlugError
+from dgraph.faults import FaultLog
 from dgraph.signals.clock import Clock
 from dgraph.signals.dependency_check import set_checking
 from dgraph.signals.signal import Input, Output, Signal, State
@@ -30,6 +31,8 @@ class Graph:
 
     Attributes:
         t: the tick the loop is at (the device state is stamped ``t``).
+        fault_log: the faults of the ticks run so far (:class:`~dgraph.faults.FaultLog`): which
+            ticks were degraded, by what, and what was done instead.
         duration: default run length in seconds (from the graph file), or None.
     """
 
@@ -44,6 +47,7 @@ class Graph:
         self.clock = Clock()
         self.t = 0
         self.duration: float | None = None
+        self.fault_log = FaultLog()
         self._entities: dict[str, Entity] = {}
         self._roles: dict[str, list[Any]] | None = None
         self._check_dependencies = False
@@ -265,9 +269,10 @@ class Graph:
         return profile(self, ticks)
 
     # -- loop -----------------------------------------------------------------------------
-    def roles(self) -> dict[str, list[Any]]:
+    def roles(self) -> dict[str, Any]:
         """What the loop treats specially: ``devices``, ``stateful`` and ``observers`` entities,
-        and ``periodic`` outputs (sampled by the loop at the start of each period window)."""
+        ``periodic`` outputs (sampled by the loop at the start of each period window) and the
+        ``faults`` log."""
         if self._roles is None:
             from dgraph.device import Device
             ents = list(self)
@@ -276,6 +281,7 @@ class Graph:
                 "stateful": [e for e in ents if e.has_state],
                 "observers": [e for e in ents if e.observes],
                 "commit": [e for e in ents if e.has_state] + [e for e in ents if e.observes and not e.has_state],
+                "faults": self.fault_log,
                 "periodic": [o for o in self._computed_outputs() if o.period > 1],
             }
         return self._roles

@@ -9,11 +9,13 @@ One tick at ``t``:
    pull their control here, so this is where the graph is evaluated);
 4. observers (recorders) read what they record, at ``t``;
 5. every stateful entity commits its staged state, stamped ``t + 1`` (this cannot fail), and
-   observers keep the row they read;
+   observers keep the row they read; the faults reported during the tick (:mod:`dgraph.faults`)
+   are kept in the graph's fault log;
 6. ``after`` hooks of every device, at ``t + 1``.
 
 Nothing is committed if steps 1-4 fail, so a failing hook or computation leaves every state
-at ``t``, consistent, and the loop can be resumed.
+at ``t``, consistent, and the loop can be resumed. Bad data is not a failure: an entity that
+meets it substitutes a safe value and reports a fault, and the tick completes, degraded.
 """
 
 from __future__ import annotations
@@ -32,9 +34,9 @@ if TYPE_CHECKING:
     from dgraph.entity import Entity
     from dgraph.graph import Graph
 
-Roles = dict[str, list[Any]]
+Roles = dict[str, Any]
 """``devices``, ``stateful``, ``observers`` and ``commit`` (stateful, then observers) entities,
-and ``periodic`` outputs of a graph."""
+``periodic`` outputs of a graph, and its ``faults`` (a :class:`~dgraph.faults.FaultLog`)."""
 
 PROGRESS_MIN_TICKS = 5000
 """Runs at least this long show a progress bar by default."""
@@ -50,7 +52,8 @@ def transition(roles: Roles, t: int, call: Callable[[Entity, str, int], None] = 
 
     ``call`` runs each entity phase (the profiler passes a timed version).
     """
-    devices, stateful, observers = roles["devices"], roles["stateful"], roles["observers"]
+    devices, stateful, observers, faults = roles["devices"], roles["stateful"], roles["observers"], roles["faults"]
+    faults.begin(t)
     for device in devices:
         device.before.run(t)
     for output in roles["periodic"]:
@@ -62,6 +65,7 @@ def transition(roles: Roles, t: int, call: Callable[[Entity, str, int], None] = 
         call(entity, "observe", t)
     for entity in roles["commit"]:
         call(entity, "commit_state", t + 1)
+    faults.commit(t)
 
 
 def run_after_hooks(devices: Sequence[Device], t_next: int) -> None:

@@ -55,7 +55,7 @@ class Signal:
     __slots__ = ("_dtype", "_finite", "_labels", "_minimum", "_shape_decl", "doc", "entity", "name", "spec")
 
     def __init__(self, shape: ShapeDecl = None, dtype: DType = "float",
-                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True,
+                 labels: Sequence[str] | None = None, doc: str = "", finite: bool | None = True,
                  minimum: float | None = None):
         self.entity: Entity | None = None
         self.name = ""
@@ -156,7 +156,7 @@ class Output(Signal):
     def __init__(self, fn: Callable[..., Any] | None = None, *, shape: ShapeDecl = None,
                  dtype: DType = "float", depends: Sequence[str] | None = None, period: int = 1,
                  labels: Sequence[str] | None = None, doc: str = "",
-                 on_demand: Sequence[str] | bool = (), finite: bool = True):
+                 on_demand: Sequence[str] | bool = (), finite: bool | None = True):
         super().__init__(shape, dtype, labels, doc or (fn.__doc__ or "" if fn else "").strip(), finite)
         if not isinstance(period, int) or period < 1:
             raise SpecError(f"period must be an int >= 1, got {period!r}")
@@ -488,7 +488,7 @@ class State(Output):
     __slots__ = ("_staged", "initial")
 
     def __init__(self, *, shape: ShapeDecl = None, dtype: DType = "float", initial: Any = None,
-                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True):
+                 labels: Sequence[str] | None = None, doc: str = "", finite: bool | None = True):
         super().__init__(None, shape=shape, dtype=dtype, depends=(), labels=labels, doc=doc, finite=finite)
         self.initial = initial
         self._staged: Any = _UNSET
@@ -591,7 +591,7 @@ class Input(Signal):
     __slots__ = ("_has_value", "_set_time", "_source", "_subs", "_value", "default", "is_set")
 
     def __init__(self, shape: ShapeDecl = None, dtype: DType = "float", default: Any = _UNSET,
-                 labels: Sequence[str] | None = None, doc: str = "", finite: bool = True,
+                 labels: Sequence[str] | None = None, doc: str = "", finite: bool | None = True,
                  minimum: float | None = None):
         super().__init__(shape, dtype, labels, doc, finite, minimum)
         self.default = default
@@ -752,7 +752,7 @@ def _short(value: Any) -> str:
 
 def output(shape: ShapeDecl = None, dtype: DType = "float", depends: Sequence[str] | None = None,
            period: int = 1, labels: Sequence[str] | None = None, doc: str = "",
-           on_demand: Sequence[str] | bool = (), finite: bool = True) -> Callable[[Callable[..., Any]], Output]:
+           on_demand: Sequence[str] | bool = (), finite: bool | None = True) -> Callable[[Callable[..., Any]], Output]:
     """Decorator declaring a computed output from a method ``def name(self, t)``.
 
     ``depends`` lists the names of the entity's inputs, states and other outputs that the
@@ -763,7 +763,8 @@ def output(shape: ShapeDecl = None, dtype: DType = "float", depends: Sequence[st
     dependency order. ``on_demand`` names the dependencies the method reads only on some ticks
     (``True``: all of them), such as the unselected inputs of a switch: they still invalidate
     the output, but are computed only if the method reads them.
-    ``finite=False``: the value may hold infinities (value checks refuse only NaN then).
+    ``finite=False``: the value may hold infinities (value checks refuse only NaN then);
+    ``finite=None``: a raw value, never checked (its readers check it).
     """
 
     def wrap(fn: Callable[..., Any]) -> Output:

@@ -37,11 +37,12 @@ class Spec:
     class of it. ``labels`` optionally names the components of a
     vector (used by recorders and plots).
 
-    ``finite`` (float signals): a value with NaN is always refused; with ``finite`` (the
-    default) an infinity is refused too where computed values are checked (``check_values``)
-    and where states are staged. A port whose values may legitimately be infinite (an unbounded
-    bound, the residual of an invalid level, a fault injector's output) declares ``finite=False``.
-    Constants set on inputs may be infinite (a saturation without a bound).
+    ``finite`` (float signals): with ``True`` (the default) NaN and infinities are refused where
+    computed values are checked (``check_values``) and where states are staged; a port whose
+    values may legitimately be infinite (an unbounded bound, the residual of an invalid level)
+    declares ``finite=False`` (NaN still refused); ``None`` refuses nothing: a raw reading that
+    its readers check themselves (a fault injector's output). A constant set on an input may be
+    infinite (a saturation without a bound), never NaN.
 
     ``minimum`` (numeric signals): the smallest value a set value may hold, element by element
     (a gain, a weight: ``0.0``); :meth:`coerce` refuses a value below it. It is checked where
@@ -51,7 +52,8 @@ class Spec:
     __slots__ = ("dtype", "exact", "finite", "labels", "minimum", "shape", "structured")
 
     def __init__(self, shape: tuple[int | None, ...] | None = None, dtype: DType = "float",
-                 labels: Sequence[str] | None = None, finite: bool = True, minimum: float | None = None):
+                 labels: Sequence[str] | None = None, finite: bool | None = True,
+                 minimum: float | None = None):
         self.structured = isinstance(dtype, type)
         if not self.structured and dtype not in DTYPES:
             raise SpecError(f"unknown dtype {dtype!r}; expected one of {DTYPES} or a class")
@@ -63,7 +65,7 @@ class Spec:
         self.shape = None if shape is None else tuple(shape)
         self.dtype = dtype
         self.labels = tuple(labels) if labels is not None else None
-        self.finite = bool(finite)
+        self.finite = None if finite is None else bool(finite)
         if minimum is not None and (self.structured or dtype in ("bool", "object")):
             raise SpecError(f"a minimum needs a numeric dtype, got {self.type_name}")
         self.minimum = minimum
@@ -185,7 +187,7 @@ class Spec:
 
     def _non_finite(self, array: np.ndarray) -> str | None:
         """``computed a value containing NaN`` (or ``inf``, if ``finite``), or None."""
-        if not (non_finite(array) if self.finite else has_nan(array)):
+        if self.finite is None or not (non_finite(array) if self.finite else has_nan(array)):
             return None
         return f"computed a value containing {'NaN' if has_nan(array) else 'inf'}"
 
@@ -201,7 +203,7 @@ class Spec:
                 and self.dtype == "float"):  # the common case: the general path below, in short
             return self._non_finite(value)
         if type(value) is float and self.dtype == "float":
-            if value != value:
+            if value != value and self.finite is not None:
                 return "computed NaN"
             if self.finite and value in (math.inf, -math.inf):
                 return f"computed {value}"
