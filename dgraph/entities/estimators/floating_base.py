@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -14,9 +15,14 @@ from dgraph.entities.estimators.leg_odometry import (
     frame_id,
     standing_configuration,
 )
+from dgraph.entities.estimators.sensor_guard import Channel, SensorGuard
 from dgraph.entities.robot.robot_state import load_model
 from dgraph.entities.robot.rotations import matrix_to_quat, quat_to_rows
 from dgraph.signals.value_types import value_type
+
+SENSOR_INPUTS = ("imu_orientation", "imu_angular_velocity", "imu_linear_acceleration", "encoder_position",
+                 "encoder_velocity", "ft_left_ankle", "ft_right_ankle")
+"""The sensor inputs, in the order the guard checks them and :meth:`FloatingBaseEstimator.readings` returns them."""
 
 _HEAD = 9
 """The floats before ``q`` in the estimate's array: ``x(t + 1)``, ``p~(t + 1)`` (the prediction state), ``v_WB``."""
@@ -97,8 +103,26 @@ class FloatingBaseEstimator(dg.Entity):
     ``p~ = q0[:3]``; the feet in contact at tick 0 are anchored from ``q0[:3]`` and the IMU
     orientation.
 
+    Sensor readings are checked where they enter, before (1): every input goes through a
+    :class:`~dgraph.entities.estimators.sensor_guard.SensorGuard` (``check_sensors``), which
+    replaces a NaN, infinite, out-of-range, jumping or frozen element by its prediction and
+    reports a fault naming ``estimator.<input>[i]``: one bad sample costs one degraded tick,
+    never the loop, and the filter states stay finite. Ranges: joint limits widened by
+    ``joint_limit_margin``, joint speeds up to 1.5 times the model's limit plus 1 rad/s, the gyro
+    up to ``gyro_range``, the accelerometer up to ``accelerometer_range``, the F/T sensors up to
+    ``force_range`` and ``torque_range``; jumps per tick: ``encoder_step`` (from the position
+    predicted with the encoder velocity), ``encoder_velocity_step``, ``gyro_step``, 0.05 per
+    quaternion component; none for the F/T sensors (their readings jump at contact changes: up
+    to 365 N per tick in the push scenario) and the accelerometer (an impact is a real spike of
+    hundreds of m/s2, and the filter needs it to stop the fall velocity; a persistent offset
+    within range is therefore integrated into the base velocity, as without the guard: there is
+    no bias estimate); frozen after ``frozen_ticks``
+    identical readings. Should a filter state still come out non-finite, the previous one is
+    kept (and reported). The defaults are well above the largest change per tick in the
+    shipped scenarios (encoder velocity 0.13 rad/s, gyro 0.005 rad/s).
+
     Parameters: ``model``, ``foot_frames``, ``ft_frames``, ``imu_frame``, ``contact_force_on``,
-    ``contact_force_off``, ``cutoff_frequency``, ``q0``, ``dt``.
+    ``contact_force_off``, ``cutoff_frequency``, ``q0``, ``dt``, and the sensor checks above.
     Inputs: ``imu_orientation``, ``imu_angular_velocity``, ``imu_linear_acceleration``,
     ``encoder_position``, ``encoder_velocity``, ``ft_left_ankle``, ``ft_right_ankle``.
     Outputs: ``q``, ``v``, ``contact_left``, ``contact_right``, ``base_velocity_world``,
@@ -123,6 +147,19 @@ class FloatingBaseEstimator(dg.Entity):
     q0 = dg.Param(None, kind="vector", doc="initial configuration; only the base position q0[:3] is used "
                                            "(default: half-sitting with the soles at z = 0)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    check_sensors = dg.Param(True, kind="bool", doc="check every sensor reading and replace a bad one (SensorGuard)")
+    frozen_ticks = dg.Param(50, kind="int", minimum=0, doc="identical readings in a row that make a sensor "
+                                                             "frozen (0: no test)")
+    joint_limit_margin = dg.Param(0.1, kind="float", minimum=0.0, doc="rad beyond a joint limit still trusted")
+    encoder_step = dg.Param(0.01, kind="float", minimum=0.0,
+                            doc="largest change (rad) per tick of an encoder from its predicted position")
+    encoder_velocity_step = dg.Param(5.0, kind="float", minimum=0.0,
+                                     doc="largest change (rad/s) per tick of an encoder velocity")
+    gyro_range = dg.Param(35.0, kind="float", minimum=0.0, doc="gyro measuring range (rad/s)")
+    gyro_step = dg.Param(2.0, kind="float", minimum=0.0, doc="largest change (rad/s) per tick of the gyro")
+    accelerometer_range = dg.Param(160.0, kind="float", minimum=0.0, doc="accelerometer range (m/s2)")
+    force_range = dg.Param(10000.0, kind="float", minimum=0.0, doc="F/T force range (N)")
+    torque_range = dg.Param(1000.0, kind="float", minimum=0.0, doc="F/T torque range (N m)")
 
     imu_orientation = dg.Input(shape=(4,), doc="quaternion [x, y, z, w] of the IMU frame in the world")
     imu_angular_velocity = dg.Input(shape=(3,), doc="gyro, IMU frame (rad/s)")
@@ -168,14 +205,43 @@ class FloatingBaseEstimator(dg.Entity):
         self._gravity = np.array(model.gravity.linear, dtype=float).tolist()
 
     def setup(self) -> None:
-        """Index the per-foot states (left, right)."""
+        """Index the per-foot states (left, right); the sensor guard."""
         self._anchor = (self.anchor_left, self.anchor_right)
         self._anchored = (self.anchored_left, self.anchored_right)
         self._pending: list[dg.State] = []
+        self._sensor_inputs = [getattr(self, name) for name in SENSOR_INPUTS]
+        self._guard: SensorGuard | None = None  # made at the first reading (dt is the graph's)
+
+    def _channels(self) -> list[Channel]:
+        """The guarded inputs, in the order of :data:`SENSOR_INPUTS`, with their ranges and steps."""
+        model, margin = self.pin_model, self.joint_limit_margin
+        speed = 1.5 * np.asarray(model.velocityLimit[6:], dtype=float) + 1.0
+        gyro, accelerometer = self.gyro_range, self.accelerometer_range
+        wrench = np.array([self.force_range] * 3 + [self.torque_range] * 3)
+        return [Channel("imu_orientation", -1.0 - 0.01, 1.0 + 0.01, 0.05, quaternion=True),
+                Channel("imu_angular_velocity", -gyro, gyro, self.gyro_step),
+                Channel("imu_linear_acceleration", -accelerometer, accelerometer),
+                Channel("encoder_position", np.asarray(model.lowerPositionLimit[7:], dtype=float) - margin,
+                        np.asarray(model.upperPositionLimit[7:], dtype=float) + margin, self.encoder_step,
+                        rate="encoder_velocity"),
+                Channel("encoder_velocity", -speed, speed, self.encoder_velocity_step),
+                Channel("ft_left_ankle", -wrench, wrench),
+                Channel("ft_right_ankle", -wrench, wrench)]
+
+    def readings(self, t: int) -> list[np.ndarray]:
+        """The sensor inputs at ``t`` as trusted (checked and repaired by the guard), in the order
+        of :data:`SENSOR_INPUTS`."""
+        guard = self._guard
+        if guard is None:
+            if not self.check_sensors:
+                return [inp(t) for inp in self._sensor_inputs]
+            guard = self._guard = SensorGuard(self, self._channels(), self.dt, self.frozen_ticks)
+        return guard.read(t)
 
     def reset(self) -> None:
         """No anchor, IMU at rest, base at ``q0[:3]``."""
         q0 = self.q0 if self.q0 is not None else standing_configuration(self.pin_model, self.foot_frames)
+        self._guard = None  # no trusted reading yet
         for k in range(2):
             self._anchor[k].set(np.zeros(3), 0)
             self._anchored[k].set(False, 0)
@@ -190,11 +256,11 @@ class FloatingBaseEstimator(dg.Entity):
         "anchored_left", "anchored_right", "prediction", "velocity_initialised"))
     def estimate(self, t: int) -> Any:
         """Everything estimated at ``t`` (an ``Estimate``: q, v, contacts, anchors, next states)."""
-        q_j, qd_j = self.encoder_position(t), self.encoder_velocity(t)
+        orientation, gyro, acceleration, q_j, qd_j, ft_left, ft_right = self.readings(t)
         frames, motions = self._kinematics.forward(q_j, qd_j)  # R_BX, r_BX; v_X, w_X (K), for left, right, I, S_k
-        r_wi = quat_to_rows(self.imu_orientation(t).tolist())
-        r_wb, w_b, u_i = _orientation(r_wi, frames[2], motions[2], self.imu_angular_velocity(t).tolist())  # (1), (2)
-        forces = _normal_forces(r_wb, frames, self.ft_left_ankle(t).tolist(), self.ft_right_ankle(t).tolist())  # (3)
+        r_wi = quat_to_rows(orientation.tolist())
+        r_wb, w_b, u_i = _orientation(r_wi, frames[2], motions[2], gyro.tolist())  # (1), (2)
+        forces = _normal_forces(r_wb, frames, ft_left.tolist(), ft_right.tolist())  # (3)
         anchored = [self.anchored_left(t), self.anchored_right(t)]
         on, off = self.contact_force_on, self.contact_force_off
         contacts = [forces[0] > on or (anchored[0] and forces[0] > off),
@@ -205,7 +271,7 @@ class FloatingBaseEstimator(dg.Entity):
             v_i = self._fused_velocity(t, dt, r_wb, w_b, u_i, frames, motions, forces, contacts)          # (5), (6)
         else:
             v_i = self.prediction(t)[:3].tolist()
-        values = self._values(t, dt, q_j, qd_j, r_wi, r_wb, w_b, u_i, p_wb, v_i)                        # (6), (7)
+        values = self._values(dt, q_j, qd_j, acceleration, r_wi, r_wb, w_b, u_i, p_wb, v_i)             # (6), (7)
         v_start = _HEAD + self.nq
         return Estimate(values[_HEAD:v_start], values[v_start:], contacts, anchored, anchors, values[6:_HEAD],
                         values[:6])
@@ -266,9 +332,9 @@ class FloatingBaseEstimator(dg.Entity):
         x0, x1, x2, _, _, _ = self.prediction(t).tolist()
         return [alpha * x0 + (1.0 - alpha) * k0, alpha * x1 + (1.0 - alpha) * k1, alpha * x2 + (1.0 - alpha) * k2]
 
-    def _values(self, t: int, dt: float, q_j: np.ndarray, qd_j: np.ndarray, r_wi: list[list[float]],
-                r_wb: tuple[float, ...], w_b: list[float], u_i: list[float], p_wb: list[float],
-                v_i: list[float]) -> np.ndarray:
+    def _values(self, dt: float, q_j: np.ndarray, qd_j: np.ndarray, acceleration: np.ndarray,
+                r_wi: list[list[float]], r_wb: tuple[float, ...], w_b: list[float], u_i: list[float],
+                p_wb: list[float], v_i: list[float]) -> np.ndarray:
         """One array ``[x(t + 1), p~(t + 1), v_WB, q, v]``: the next states of (6) and the tick
         transition, with ``v_WB = v_I - R_WB u_I``, and (7) with ``R_WB^T v_WB = R_WB^T v_I - u_I``.
         Four writes: the floats up to the base of ``q`` (one run), the joints of ``q``, the base of
@@ -276,7 +342,7 @@ class FloatingBaseEstimator(dg.Entity):
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = r_wb
         (e00, e01, e02), (e10, e11, e12), (e20, e21, e22) = r_wi
         (u0, u1, u2), (v0, v1, v2), (p0, p1, p2), (g0, g1, g2) = u_i, v_i, p_wb, self._gravity
-        a0, a1, a2 = self.imu_linear_acceleration(t).tolist()
+        a0, a1, a2 = acceleration.tolist()
         b0, b1, b2 = v0 - (r00 * u0 + r01 * u1 + r02 * u2), v1 - (r10 * u0 + r11 * u1 + r12 * u2), \
             v2 - (r20 * u0 + r21 * u1 + r22 * u2)
         v_start = _HEAD + self.nq
@@ -326,7 +392,11 @@ class FloatingBaseEstimator(dg.Entity):
         """
         est = self.estimate(t)
         pending = [self.prediction]
-        self.prediction.stage(est.next_prediction, copy=False)  # a slice of the estimate's own array
+        if math.isfinite(np.vdot(est.next_prediction, est.next_prediction)):
+            self.prediction.stage(est.next_prediction, copy=False)  # a slice of the estimate's own array
+        else:  # only with check_sensors off, or a sensor value the guard let through
+            self.prediction.stage(self.prediction.value)
+            self.report_fault(t, "prediction", "not finite", "kept the previous one")
         if est.contacts != est.anchored:
             for k in (0, 1):
                 if est.contacts[k] != est.anchored[k]:
@@ -341,9 +411,11 @@ class FloatingBaseEstimator(dg.Entity):
         self._pending = pending
 
     def commit_state(self, t_next: int) -> None:
-        """Publish the staged states at ``t + 1``."""
+        """Publish the staged states at ``t + 1``; the guard's trusted readings become its prediction base."""
         dg.commit_all(self._pending, t_next)
         self._pending = []
+        if self._guard is not None:
+            self._guard.commit()
 
 
 def _orientation(r_wi: list[list[float]], imu: list[float], motion: list[float],
