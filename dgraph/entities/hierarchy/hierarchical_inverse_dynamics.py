@@ -126,6 +126,10 @@ class HierarchicalInverseDynamics(StackCommands, TorqueSolver):
         if status == SOLVED and fixed.residual(result.x) > self.constraint_tolerance:
             status = PRIMAL_INFEASIBLE
         y = result.x
-        tau = constraints.torques(y, state.bias_forces) if status == SOLVED else self.fallback_torque(state)
+        if status == SOLVED:
+            self.keep_state(state)
+            tau = constraints.torques(y, state.bias_forces)
+        else:
+            tau = self.fallback_torque(t, state, status)
         return QPSolution(y[:self.nv], tau, constraints.forces(y), status, result.iterations, result.solve_time,
                           contacts=active, contact_rows=rows)

@@ -117,8 +117,8 @@ class RobotState:
     (the solver copies them into its QP); a read after the data was reused raises, and the
     RobotModel outputs of the same names hand out copies. Every other property is computed from
     that data at its first read and kept (a copy owned by this state, shared by every reader of
-    the tick): each is computed at most once per state (the methods ``frame_placement`` and
-    ``gravity_torque`` compute at each call). Every array handed out is read-only.
+    the tick): each is computed at most once per state (the method ``frame_placement`` computes
+    at each call). Every array handed out is read-only.
 
     The pass runs on ``fields.data``: a :class:`DataFields` is made once by the data's owner (a
     :class:`~dgraph.entities.robot.model.RobotModel`) for all its passes.
@@ -206,10 +206,6 @@ class RobotState:
         """``A_G_dot v``: the momentum rate at ``a = 0`` (``h_G_dot = A_G a + A_G_dot v``), with
         the pass's ``dA_G``."""
         return _read_only(self.fields.momentum_matrix_rate @ self.v)
-
-    def gravity_torque(self) -> np.ndarray:
-        """``g(q)``, the generalized gravity (used by fallbacks; computed on request)."""
-        return pin.computeGeneralizedGravity(self.model, self.model.createData(), self.q).copy()
 
     # -- frames -----------------------------------------------------------------------------
     def frame_id(self, name: str) -> int:

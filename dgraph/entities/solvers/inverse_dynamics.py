@@ -89,8 +89,10 @@ class InverseDynamicsSolver(TorqueSolver):
                                       passivity.without_bound())
         solution.passivity_relaxed = relax
         solution.contact_rows = rows
-        if solution.status != SOLVED:
-            solution.tau = self.fallback_torque(state)
+        if solution.status == SOLVED:
+            self.keep_state(state)
+        else:
+            solution.tau = self.fallback_torque(t, state, solution.status)
         return solution
 
     @dg.output(shape=(), dtype="bool", depends=("solution",))

@@ -5,11 +5,13 @@ from __future__ import annotations
 import abc
 
 import numpy as np
+import pinocchio as pin
 
 import dgraph as dg
 from dgraph.control.contact import ContactConstraint
 from dgraph.control.equation import TaskEquation
 from dgraph.control.solutions import QPSolution
+from dgraph.control.status import Status
 from dgraph.entities.named_inputs import declare_named_inputs
 from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model, unactuated_dofs
 from dgraph.entities.solver_report import SolverReport
@@ -39,7 +41,10 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
     (s, assembly and every solve of the tick).
 
     When a solve fails, ``tau`` is the fallback ``g_j(q) - fallback_damping v_j``, clipped to
-    the torque limits: gravity compensation with joint damping, never an exception.
+    the torque limits: gravity compensation with joint damping, never an exception. It is
+    computed from the last robot state that was finite (the state at ``t`` unless bad data
+    reached it), so it is always finite; the tick reports a fault naming ``solver.tau``, the
+    status and the state used (:mod:`dgraph.faults`).
     """
 
     reserved_inputs: tuple[str, ...] = ()
@@ -69,6 +74,8 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
         """Collect the task and contact inputs."""
         self._task_inputs = [getattr(self, n) for n in self.tasks]
         self._contact_inputs = [getattr(self, n) for n in self.contacts]
+        self._last_good: tuple[np.ndarray, np.ndarray] | None = None
+        self._gravity_data: pin.Data | None = None
 
     def check(self) -> list[str]:
         """The plugged robot model must be the size of ``model``."""
@@ -93,11 +100,31 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
             raise dg.SpecError(f"{self.name}.{name} at tick {t}: {problem}", entity=self.name, signal=name)
         return equation
 
-    def fallback_torque(self, state: RobotState) -> np.ndarray:
-        """``g_j(q) - d v_j``, clipped to the torque limits."""
+    def keep_state(self, state: RobotState) -> None:
+        """Remember ``(q, v)`` of a state the solve succeeded on (finite): the fallback's last resort."""
+        self._last_good = (state.q.copy(), state.v.copy())
+
+    def fallback_torque(self, t: int, state: RobotState, status: int) -> np.ndarray:
+        """``g_j(q) - d v_j``, clipped to the torque limits, on the state at ``t`` or, if that is
+        not finite, on the last state kept by :meth:`keep_state` (zero torque if none); the
+        fault is reported."""
+        q, v, used = state.q, state.v, "the state at this tick"
+        if not (np.isfinite(q).all() and np.isfinite(v).all()):
+            q, v = self._last_good or (None, None)
+            used = "the last finite state" if q is not None else "zero torque: no finite state yet"
+        self.report_fault(t, "tau", f"solve failed: {Status(status).name}",
+                          f"fallback torque g(q) - d v on {used}")
+        if q is None:
+            return np.zeros(self.n_actuated)
+        gravity = pin.computeGeneralizedGravity(state.model, self._fallback_data(state.model), q)
         n_unactuated = self.n_unactuated
-        tau = state.gravity_torque()[n_unactuated:] - self.fallback_damping * state.v[n_unactuated:]
+        tau = gravity[n_unactuated:] - self.fallback_damping * v[n_unactuated:]
         return np.clip(tau, -self.effort_limit, self.effort_limit)
+
+    def _fallback_data(self, model: pin.Model) -> pin.Data:
+        if self._gravity_data is None:  # made at the first failure: most runs never need it
+            self._gravity_data = model.createData()
+        return self._gravity_data
 
     @abc.abstractmethod
     def solution(self, t: int) -> QPSolution:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import dgraph as dg
@@ -61,7 +62,12 @@ def test_a_non_finite_task_gives_the_fallback_torque_and_a_status():
     g["com_task"].kp.set(1e308)
     g["com"].reference_position.set(np.array([1e308, 0.0, 0.0]))
     assert solver.status(0) == NOT_FINITE
-    np.testing.assert_allclose(solver.tau(0), solver.fallback_torque(g["robot"].state(0)))
+    state = g["robot"].state(0)
+    gravity = pin.computeGeneralizedGravity(state.model, state.model.createData(), state.q)[6:]
+    np.testing.assert_allclose(solver.tau(0), np.clip(gravity - solver.fallback_damping * state.v[6:],
+                                                      -solver.effort_limit, solver.effort_limit))
+    (fault,) = g.fault_log.staged(0)
+    assert (fault.signal, fault.cause) == (f"{solver.name}.tau", "solve failed: NOT_FINITE")
 
 
 def test_there_is_no_passive_mode_to_ignore():
