@@ -77,7 +77,8 @@ class MujocoDevice(dg.Device):
     no command was ever valid, zero torque (torque mode) or a hold of the joints where they were
     when the fault began (position mode: target ``q_j(t)``, no velocity reference, no
     feed-forward). The state ``control_fault`` (int, stamped ``t + 1`` like ``joint_torque``)
-    counts the consecutive ticks whose command was replaced, 0 when the command was applied;
+    counts the consecutive ticks whose command was replaced, 0 when the command was applied, and
+    each replaced tick reports a fault naming ``device.control`` (:mod:`dgraph.faults`);
     like ``fallen`` it is staged only when it changes. Non-finite wrench inputs are disturbances,
     not commands: they still raise a ``DGraphError`` (the tick fails, every state stays at ``t``).
 
@@ -325,6 +326,9 @@ class MujocoDevice(dg.Device):
         if dt != self._timestep:
             m.opt.timestep = self._timestep = dt
         tau, replaced = self._torque(t)
+        if replaced:
+            self.report_fault(t, "control", "not finite", "applied the last valid command (if none: zero torque, "
+                              "or in position mode the joints held)")
         wrenches = self._read_wrenches(t) if self._wrenches else ()
         mujoco.mj_getState(m, d, self._saved, _STATE)
         self._pending = True

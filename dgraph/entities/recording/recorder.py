@@ -10,6 +10,7 @@ import numpy as np
 import dgraph as dg
 from dgraph.entities.recording.columns import Table
 from dgraph.entities.recording.rerun_stream import RerunStream, default_flush_every, open_stream_for
+from dgraph.faults import Fault
 from dgraph.signals.signal import Signal
 
 
@@ -33,6 +34,11 @@ class Recorder(dg.Entity):
     per tick), saved as ``.npz`` on :meth:`close` (keys ``tick``, ``time`` and
     ``entity.signal``), and to Rerun as time series on the ``tick`` and ``time`` timelines,
     one series per component, entity path ``signals/<entity>/<signal>``.
+
+    The faults of the recorded ticks (:mod:`dgraph.faults`: what bad data a tick survived and
+    what replaced it) are recorded too: in the ``.npz``, ``degraded`` (per recorded tick) and
+    one entry per fault in ``fault_tick``, ``fault_signal``, ``fault_cause``, ``fault_action``
+    and ``fault_detail``; in Rerun, a warning on the ``faults`` text log at the fault's tick.
 
     Parameters: ``signals`` (``entity.signal`` names), ``rerun`` (``save``, the default: an .rrd
     file, ``rrd_path`` or ``out/<graph name>.rrd``; ``spawn``: a viewer; ``serve``: a web viewer
@@ -63,6 +69,9 @@ class Recorder(dg.Entity):
         self._sources: list[Signal] | None = None
         self._rows = Table()  # the tick, then one column per signal
         self._row_written = False  # at this tick's observe, kept if the tick commits
+        self._faults: list[Fault] = []  # of the kept rows
+        self._tick_faults: list[Fault] = []  # of this tick's row, kept with it
+        self._degraded: list[int] = []  # the recorded ticks with a fault
         self._stream: RerunStream | None = None
         self._plotted: list[tuple[int, str, list[str]]] | None = None
         self._pending = 0
@@ -103,6 +112,7 @@ class Recorder(dg.Entity):
         except (ValueError, TypeError) as exc:
             raise self._misfit(row, t, exc) from exc
         self._row_written = True
+        self._tick_faults = self.graph.fault_log.staged(t)
 
     def _misfit(self, row: tuple[Any, ...], t: int, cause: Exception) -> dg.DGraphError:
         """The error naming the recorded signal whose value at ``t`` does not fit its column."""
@@ -118,6 +128,12 @@ class Recorder(dg.Entity):
         if self._row_written:
             self._row_written = False
             self._rows.keep()
+            if self._tick_faults:
+                self._faults += self._tick_faults
+                self._degraded.append(self._tick_faults[0].tick)
+                if self._stream is not None:
+                    self._stream.send_faults(self._tick_faults)
+                self._tick_faults = []
         if self._stream is not None:
             self._pending += 1
             if self._pending >= self.flush_every:
@@ -158,11 +174,16 @@ class Recorder(dg.Entity):
         return self._rows.column(0).astype(np.int64)
 
     def data(self) -> dict[str, np.ndarray]:
-        """The recording so far: ``tick``, ``time`` (s) and one array per signal (ticks first)."""
+        """The recording so far: ``tick``, ``time`` (s), one array per signal (ticks first),
+        ``degraded`` and the ``fault_*`` arrays (see the class docstring)."""
         out = {"tick": self.ticks}
         out["time"] = out["tick"] * (self.graph.dt if self.graph is not None else 1.0)
         for i, name in enumerate(self.signals, start=1):
             out[name] = self._rows.column(i).copy()
+        out["degraded"] = np.isin(out["tick"], self._degraded)
+        out["fault_tick"] = np.array([f.tick for f in self._faults], dtype=np.int64)
+        for field in ("signal", "cause", "action", "detail"):
+            out[f"fault_{field}"] = np.array([getattr(f, field) for f in self._faults], dtype=str)
         return out
 
     def close(self) -> None:

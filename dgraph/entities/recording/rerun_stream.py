@@ -34,6 +34,7 @@ from urllib.parse import quote
 import numpy as np
 
 from dgraph.errors import GraphError
+from dgraph.faults import Fault
 
 
 @dataclass(frozen=True)
@@ -247,6 +248,15 @@ class RerunStream:
             offsets = pa.array(np.arange(len(values) + 1, dtype=np.int32) * values.shape[1])
             columns.append(pa.ListArray.from_arrays(offsets, pa.array(values.ravel())))
         self.send_batch(ticks, fields, columns)
+
+    def send_faults(self, faults: list[Fault]) -> None:
+        """Log each fault as a warning on the ``faults`` text log, at its tick (faults are rare:
+        one log call each)."""
+        rr, rec = self._rr, self.rec
+        for fault in faults:
+            rec.set_time("tick", sequence=fault.tick)
+            rec.set_time("time", duration=fault.tick * self.dt)
+            rec.log("faults", rr.TextLog(str(fault), level=rr.TextLogLevel.WARN))
 
     def close(self) -> None:
         """Release this user's share; the last user flushes and closes the sink."""
