@@ -117,12 +117,21 @@ def _run(args: argparse.Namespace) -> int:
         simulated = graph.t * graph.dt
         print(f"{graph.name}: {graph.t} ticks, {simulated:.3f} s simulated in {wall:.2f} s "
               f"(real-time factor {simulated / wall if wall > 0 else float('inf'):.1f})")
+        _print_faults(graph)
         for entity in graph:
             if entity.type_name == "Recorder":
                 for label, target in (("rerun", entity.rrd_path), ("npz", entity.npz_path)):
                     if target and (label == "npz" or entity.rerun == "save") and Path(target).is_file():
                         print(f"  {entity.name}: {label} -> {target}")
     return 0
+
+
+def _print_faults(graph: Any) -> None:
+    """The degraded ticks of a run (bad data survived, see dgraph.faults), and the most frequent faults."""
+    log = graph.fault_log
+    if log.degraded_ticks:
+        print(f"  degraded ticks: {log.degraded_ticks} of {graph.t} (first: {log.faults[0]})")
+        print("\n".join(f"    {line}" for line in log.summary().splitlines()))
 
 
 def cmd_check(args: argparse.Namespace) -> int:

@@ -1,0 +1,113 @@
+"""A fault campaign on standing TALOS: every sensor signal the controller reads gets NaN, inf, a
+frozen value and a jump, for one tick and for 100 ticks, with value checks on and off.
+
+Per sensor and setting, one run of ``graphs/talos_standing.yaml`` with the eight faults in
+sequence (a :class:`sim.faults.SensorFault` between the device and the estimator, each window
+0.4 s after the last). What must hold: the loop never stops; MuJoCo never receives a non-finite
+torque (the device never had to replace one either); TALOS stays up, its base height within 2 cm
+of standing (6 cm for the accelerometer: its 100-tick offset of 50 m/s2 is in range and is not
+tested for jumps, since impacts are real spikes, so the filter integrates it); the first tick of
+every NaN, inf or caught jump names ``estimator.<sensor>`` in the graph's fault log; a frozen
+reading is named within ``frozen_ticks`` (50) ticks; and once a window ends the sensor is trusted
+again within a few ticks (the next tick proceeds with fresh data).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dgraph as dg
+from sim.faults import SensorFault
+
+ROOT = Path(__file__).resolve().parents[2]
+START, SPACING = 0.3, 0.4
+FAULTS = [(kind, ticks) for kind in ("nan", "inf", "frozen", "jump") for ticks in (1, 100)]
+SENSORS = {  # the jump of each (a glitch a real sensor can produce), and whether the guard tests jumps
+    "imu_orientation": (0.5, True), "imu_angular_velocity": (5.0, True), "imu_linear_acceleration": (50.0, False),
+    "encoder_position": (0.5, True), "encoder_velocity": (10.0, True), "ft_left_ankle": (500.0, False),
+    "ft_right_ankle": (500.0, False)}
+ELEMENT = {"encoder_position": 3, "encoder_velocity": 3}  # the left knee; element 0 elsewhere
+
+
+def standing_with_faults(sensor: str) -> tuple[dg.Graph, list[tuple[str, int, int]]]:
+    """The standing graph with the campaign's faults in series on ``sensor``; the plan
+    ``(kind, ticks, first tick)``."""
+    graph = dg.load(str(ROOT / "graphs" / "talos_standing.yaml"), {"recorder.rerun": "off", "view.rerun": "off"})
+    magnitude = SENSORS[sensor][0]
+    source = graph[f"estimator.{sensor}"].source
+    graph.unplug(f"estimator.{sensor}")
+    plan = []
+    for i, (kind, ticks) in enumerate(FAULTS):
+        start = START + SPACING * i
+        fault = graph.add(SensorFault(f"fault{i}", kind=kind, start=start, ticks=ticks, magnitude=magnitude,
+                                      indices=[ELEMENT.get(sensor, 0)]))
+        graph.plug(source, fault.reading)
+        source = fault.output
+        plan.append((kind, ticks, round(start / graph.dt)))
+    graph.plug(source, f"estimator.{sensor}")
+    return graph, plan
+
+
+def run_campaign(sensor: str, check_values: bool) -> tuple[dg.Graph, list[tuple[str, int, int]], dict]:
+    graph, plan = standing_with_faults(sensor)
+    graph.check_values = check_values
+    device = graph["device"]
+    seen = {"ctrl_finite": True, "heights": [], "control_fault": 0}
+
+    def watch(t: int) -> None:  # after each step: what MuJoCo was given, and where the robot is
+        seen["ctrl_finite"] &= bool(np.isfinite(device.data.ctrl).all())
+        seen["heights"].append(float(device.q.value[2]))
+        seen["control_fault"] = max(seen["control_fault"], int(device.control_fault.value))
+
+    device.after.add(watch)
+    with graph:
+        graph.run(duration=START + SPACING * len(FAULTS), progress=False)
+    return graph, plan, seen
+
+
+@pytest.mark.parametrize("check_values", [False, True], ids=["checks-off", "checks-on"])
+@pytest.mark.parametrize("sensor", list(SENSORS))
+def test_standing_talos_survives_every_fault_of_every_sensor(sensor, check_values):
+    graph, plan, seen = run_campaign(sensor, check_values)
+    assert graph.t == round((START + SPACING * len(FAULTS)) / graph.dt)  # the loop never stopped
+    assert seen["ctrl_finite"] and seen["control_fault"] == 0  # no non-finite torque, none even replaced
+    heights = np.array(seen["heights"])
+    bound = 0.06 if sensor == "imu_linear_acceleration" else 0.02
+    assert not graph["device"].fallen.value and np.abs(heights - heights[0]).max() < bound, \
+        f"base height moved by {np.abs(heights - heights[0]).max():.3f} m"
+    name = f"estimator.{sensor}"
+    faults = [f for f in graph.fault_log.faults if f.signal.startswith(name)]
+    for kind, ticks, first in plan:
+        at_first = [f for f in faults if f.tick == first]
+        if kind in ("nan", "inf") or (kind == "jump" and SENSORS[sensor][1]):
+            assert at_first, f"{kind} at tick {first}: no fault names {name}"
+            expected = {"nan": "NaN", "inf": "inf", "jump": "jump"}[kind]
+            assert at_first[0].cause in (expected, "not a unit quaternion"), at_first[0]
+        if kind == "frozen" and ticks == 100:
+            frozen = [f for f in faults if first <= f.tick < first + ticks and f.cause == "frozen"]
+            assert frozen and frozen[0].tick <= first + 50, f"frozen from tick {first}: {frozen[:1]}"
+        late = [f for f in faults if first + ticks + 5 <= f.tick < first + round(SPACING / graph.dt)]
+        assert not late, f"{kind} over [{first}, {first + ticks}): still replaced after: {late[0]}"
+
+
+def test_without_the_guard_a_nan_encoder_costs_one_fallback_tick():
+    """``check_sensors`` off and value checks off: the NaN reaches the solver, which falls back on
+    the last finite state (a finite torque), and the next tick is normal again."""
+    graph = dg.load(str(ROOT / "graphs" / "talos_standing.yaml"),
+                    {"recorder.rerun": "off", "view.rerun": "off", "estimator.check_sensors": False})
+    fault = graph.add(SensorFault("fault", kind="nan", start=0.3, ticks=1, indices=[3]))
+    graph.plug(graph["estimator.encoder_position"].source, fault.reading)
+    graph.plug(fault.output, "estimator.encoder_position")
+    torques = {}
+    keep = {299, 300, 301}
+    graph["device"].before.add(lambda t: torques.update({t: graph["solver"].tau(t).copy()}) if t in keep else None)
+    with graph:
+        graph.run(duration=1.0, progress=False)
+    assert all(np.isfinite(tau).all() for tau in torques.values()) and len(torques) == 3
+    causes = {(f.tick, f.signal, f.cause) for f in graph.fault_log.faults}
+    assert (300, "solver.tau", "solve failed: NOT_FINITE") in causes
+    assert graph.fault_log.degraded_ticks == 1 and not graph["device"].fallen.value
+    assert np.abs(torques[301] - torques[299]).max() < 5.0  # back to the QP's torque, not the fallback
