@@ -229,3 +229,11 @@ def test_a_sinusoid_3_vector_is_its_components_and_its_derivatives():
         for low, high in (("output", "velocity"), ("velocity", "acceleration")):
             slope = (point.signal(low)(t + 1) - point.signal(low)(t - 1)) / (2 * DT)
             np.testing.assert_allclose(slope, point.signal(high)(t), atol=1e-5)
+
+
+@pytest.mark.parametrize("name", ["frequency", "phase", "offset"])
+def test_a_sinusoid_parameter_that_does_not_fit_the_amplitude_is_named(name):
+    params = {"amplitude": [0.0, 0.05, 0.0], "frequency": 0.5, name: [1.0, 2.0]}
+    with pytest.raises(dg.ParamError, match=rf"^s: {name} has shape \(2,\) but amplitude \(3,\): give a scalar or one "
+                                            "value per component$"):
+        Sinusoid("s", **params)

@@ -40,9 +40,9 @@ class Sinusoid(dg.Entity):
         component are kept as floats (one ``math.sin`` and ``math.cos`` per tick)."""
         self.value_shape = np.shape(self.amplitude)
         self._amplitude = np.asarray(self.amplitude, dtype=float)
-        omega = 2.0 * np.pi * np.broadcast_to(self.frequency, self.value_shape)
-        phase = np.broadcast_to(self.phase, self.value_shape)
-        self._offset = np.broadcast_to(self.offset, self.value_shape)
+        omega = 2.0 * np.pi * self._per_component("frequency")
+        phase = self._per_component("phase")
+        self._offset = self._per_component("offset")
         self._scalar = self.value_shape == ()
         if omega.size and (omega == omega.flat[0]).all() and (phase == phase.flat[0]).all():
             self._omega, self._phase = float(omega.flat[0]), float(phase.flat[0])
@@ -51,6 +51,15 @@ class Sinusoid(dg.Entity):
             self._omega, self._phase, self._sin, self._cos = omega, phase, np.sin, np.cos
         self._last_tick: int | None = None  # the tick of _last_waves
         self._last_waves: tuple[Any, Any, Any] = ()
+
+    def _per_component(self, name: str) -> np.ndarray:
+        """The parameter ``name`` broadcast to the amplitude's shape (``ParamError`` if it does not fit)."""
+        value = getattr(self, name)
+        try:
+            return np.broadcast_to(value, self.value_shape)
+        except ValueError:
+            raise dg.ParamError(f"{self.name}: {name} has shape {np.shape(value)} but amplitude {self.value_shape}: "
+                                "give a scalar or one value per component", entity=self.name) from None
 
     def _envelope(self, s: float) -> tuple[float, float, float]:
         """``e, e_dot, e_ddot`` of the fade-in at time ``s``."""
