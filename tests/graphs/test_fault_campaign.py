@@ -14,6 +14,8 @@ again within a few ticks (the next tick proceeds with fresh data).
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -111,3 +113,32 @@ def test_without_the_guard_a_nan_encoder_costs_one_fallback_tick():
     assert (300, "solver.tau", "solve failed: NOT_FINITE") in causes
     assert graph.fault_log.degraded_ticks == 1 and not graph["device"].fallen.value
     assert np.abs(torques[301] - torques[299]).max() < 5.0  # back to the QP's torque, not the fallback
+
+
+FAULTY_STANDING = """\
+extends: {base}
+name: faulty_standing
+entities:
+  glitch: {{type: SensorFault, params: {{kind: inf, start: 0.2, ticks: 1, indices: [3]}}}}
+remove:
+  plugs: [device.encoder_position -> estimator.encoder_position]
+plugs:
+  - device.encoder_position -> glitch.reading
+  - glitch.output -> estimator.encoder_position
+"""
+
+
+def test_a_graph_file_with_a_glitch_runs_and_reports_its_degraded_tick(tmp_path):
+    """From a graph file, through the CLI: the run completes, its summary counts the degraded
+    tick and names the encoder, and the .npz carries the fault."""
+    graph_file = tmp_path / "faulty.yaml"
+    graph_file.write_text(FAULTY_STANDING.format(base=ROOT / "graphs" / "talos_standing.yaml"))
+    npz = tmp_path / "faulty.npz"
+    result = subprocess.run([str(Path(sys.executable).parent / "dgraph"), "run", str(graph_file), "--duration", "0.5",
+                             "--rerun", "off", "--npz", str(npz), "-q"], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert "degraded ticks: 1 of 500 (first: tick 200: estimator.encoder_position[3]: inf" in result.stdout, \
+        result.stdout
+    data = np.load(npz)
+    assert data["fault_tick"].tolist() == [200] and data["fault_signal"].tolist() == ["estimator.encoder_position[3]"]
+    assert data["degraded"].sum() == 1 and data["tick"][data["degraded"]].tolist() == [200]
