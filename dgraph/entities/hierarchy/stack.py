@@ -141,14 +141,24 @@ class StackCommands:
         if not self._in_stack(task):
             raise dg.ParamError(f"{self.name}: task {task!r} is not in the stack", entity=self.name)
 
+    def constant_problem(self, name: str, value: Any) -> str | None:
+        """A stack set as a constant (a graph file's, a command's) is checked where it is set."""
+        return self._stack_problem(value) if name == "stack" else None
+
+    def _stack_problem(self, stack: PriorityStack) -> str | None:
+        """What is wrong with ``stack`` (unknown or repeated task names), or None."""
+        names = [task for level in stack for task in level]
+        if len(set(names)) != len(names) or not set(names) <= set(self.tasks):
+            return f"expected levels of distinct task names among {list(self.tasks)}, got {stack!r}"
+        return None
+
     def read_stack(self, t: int) -> PriorityStack:
         """``stack(t)`` (a :class:`PriorityStack`: the input's type), checked once per value:
         known task names, each at most once (``SpecError`` otherwise)."""
         stack = self.stack(t)
         if stack is not self._checked_stack:
-            names = [task for level in stack for task in level]
-            if len(set(names)) != len(names) or not set(names) <= set(self.tasks):
-                raise dg.SpecError(f"{self.name}.stack at tick {t}: expected levels of distinct task names among "
-                                   f"{list(self.tasks)}, got {stack!r}", entity=self.name, signal="stack")
+            problem = self._stack_problem(stack)
+            if problem is not None:
+                raise dg.SpecError(f"{self.name}.stack at tick {t}: {problem}", entity=self.name, signal="stack")
             self._checked_stack = stack
         return stack

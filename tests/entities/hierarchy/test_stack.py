@@ -10,7 +10,7 @@ import dgraph as dg
 from dgraph.control import RowBlock
 from dgraph.entities.devices import KinematicDevice
 from dgraph.entities.hierarchy import HierarchicalSolver
-from dgraph.entities.hierarchy.stack import initial_stack, moved, pushed
+from dgraph.entities.hierarchy.stack import PriorityStack, initial_stack, moved, pushed
 
 
 class FixedRows(dg.Entity):
@@ -99,8 +99,20 @@ def test_commands_name_the_solver_on_bad_requests(graph):
         solver.push("plus", 7)
 
 
-def test_a_stack_set_by_hand_is_checked_at_the_tick(graph):
-    graph["solver"].stack.set((("plus",), ("nope",)))
+def test_a_stack_set_by_hand_is_checked_where_it_is_set_and_a_plugged_one_at_the_tick(graph):
+    with pytest.raises(dg.SpecError, match=r"solver\.stack: expected levels of distinct task names .*'nope'") as info:
+        graph["solver"].stack.set((("plus",), ("nope",)))
+    assert (info.value.entity, info.value.signal) == ("solver", "stack")
+    with pytest.raises(dg.SpecError, match=r"solver\.stack: expected levels of distinct task names"):
+        graph["solver"].stack.set((("plus",), ("plus",)))
+
+    class Stacks(dg.Entity):
+        @dg.output(dtype=PriorityStack, depends=())
+        def stack(self, t):
+            return PriorityStack((("plus",), ("nope",)))
+
+    graph.add(Stacks("stacks"))
+    graph.plug("stacks.stack", "solver.stack")
     with pytest.raises(dg.SpecError, match=r"solver\.stack at tick 0: .*'nope'") as info:
         graph.run(ticks=1)
     assert (info.value.entity, info.value.signal) == ("solver", "stack")
@@ -118,3 +130,6 @@ def test_an_edited_stack_is_saved_and_loaded_back_as_a_stack():
     assert again["solver"].levels() == [["b"], ["a"], ["c"]] and dumps(again) == saved
     with pytest.raises(dg.GraphFileError, match=r"solver\.stack: cannot make a PriorityStack of 'b'"):
         loads(saved.replace("solver.stack:\n  - [b]\n  - [a]\n  - [c]", "solver.stack: b"))
+    with pytest.raises(dg.GraphFileError, match=r"<string>:\d+ \[set\.solver\.stack\]: solver\.stack: expected "
+                                                r"levels of distinct task names among \['a', 'b', 'c'\]"):
+        loads(saved.replace("  - [c]", "  - [cc]"))  # a typo: refused at its line, not at tick 0
