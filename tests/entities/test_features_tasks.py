@@ -288,3 +288,10 @@ def test_a_graph_file_setting_a_gain_that_does_not_fit_is_refused_at_its_line(se
     with pytest.raises(dg.GraphFileError) as caught:
         check(path)  # what `dgraph check` runs: it no longer says OK to what `run` refuses at tick 0
     assert str(caught.value) == f"{path}:4 [set.{setting.split(':')[0]}]: {message}"
+
+
+def test_a_zero_reference_quaternion_is_refused_where_it_is_set():
+    waist = FramePose("waist", frame="base_link", mask="000111")
+    waist.reference_orientation.set([0.0, 0.0, 0.0, 2.0])  # normalised when used
+    with pytest.raises(dg.SpecError, match=r"waist\.reference_orientation: expected a unit quaternion \[x, y, z, w\]"):
+        waist.reference_orientation.set(np.zeros(4))

@@ -48,6 +48,12 @@ class FramePose(FrameReader, Feature):
         self.size = self.mask.count("1")
         self._reference: tuple[np.ndarray, list[list[float]]] | None = None  # (quaternion, R*^T) last converted
 
+    def constant_problem(self, name: str, value: object) -> str | None:
+        """A constant reference orientation is a quaternion that can be normalised."""
+        if name == "reference_orientation" and not np.linalg.norm(value) > 1e-9:
+            return f"expected a unit quaternion [x, y, z, w], got {value}"
+        return None
+
     def _reference_rotation(self, t: int) -> list[list[float]]:
         """``R*^T`` (rows of floats) from the reference quaternion (normalised), converted again
         only when the quaternion is not the same constant as last time."""
