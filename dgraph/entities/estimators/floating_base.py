@@ -32,12 +32,15 @@ _HEAD = 9
 class Estimate:
     """Everything computed at one tick (the ``estimate`` output); read-only for readers."""
 
-    __slots__ = ("anchored", "anchors", "base_velocity_world", "contacts", "next_prediction", "q", "v")
+    __slots__ = ("anchored", "anchors", "base_velocity_world", "contacts", "next_prediction", "q", "sensor_faults",
+                 "v")
 
     def __init__(self, q: np.ndarray, v: np.ndarray, contacts: list[bool], anchored: list[bool],
-                 anchors: list[np.ndarray | None], base_velocity_world: np.ndarray, next_prediction: np.ndarray):
+                 anchors: list[np.ndarray | None], base_velocity_world: np.ndarray, next_prediction: np.ndarray,
+                 sensor_faults: int = 0):
         self.q, self.v, self.contacts, self.anchored, self.anchors = q, v, contacts, anchored, anchors
         self.base_velocity_world, self.next_prediction = base_velocity_world, next_prediction
+        self.sensor_faults = sensor_faults
 
 
 @dg.register
@@ -126,9 +129,9 @@ class FloatingBaseEstimator(dg.Entity):
     Inputs: ``imu_orientation``, ``imu_angular_velocity``, ``imu_linear_acceleration``,
     ``encoder_position``, ``encoder_velocity``, ``ft_left_ankle``, ``ft_right_ankle``.
     Outputs: ``q``, ``v``, ``contact_left``, ``contact_right``, ``base_velocity_world``,
-    ``estimate`` (everything, as an object). States: ``anchor_left``, ``anchor_right``,
-    ``anchored_left``, ``anchored_right``, ``prediction`` (``[x, p~]``, staged together every
-    tick), ``velocity_initialised``.
+    ``sensor_faults`` (elements replaced at the tick), ``estimate`` (everything, as an object).
+    States: ``anchor_left``, ``anchor_right``, ``anchored_left``, ``anchored_right``,
+    ``prediction`` (``[x, p~]``, staged together every tick), ``velocity_initialised``.
     """
 
     has_state = True
@@ -274,7 +277,7 @@ class FloatingBaseEstimator(dg.Entity):
         values = self._values(dt, q_j, qd_j, acceleration, r_wi, r_wb, w_b, u_i, p_wb, v_i)             # (6), (7)
         v_start = _HEAD + self.nq
         return Estimate(values[_HEAD:v_start], values[v_start:], contacts, anchored, anchors, values[6:_HEAD],
-                        values[:6])
+                        values[:6], self._guard.faulty if self._guard is not None else 0)
 
     def _position(self, t: int, r_wb: tuple[float, ...], frames: list[list[float]], forces: list[float],
                   contacts: list[bool], anchored: list[bool]) -> tuple[list[float], list[np.ndarray | None]]:
@@ -381,6 +384,11 @@ class FloatingBaseEstimator(dg.Entity):
     def base_velocity_world(self, t: int) -> Any:
         """Fused linear velocity of the base origin in the world frame."""
         return self.estimate(t).base_velocity_world
+
+    @dg.output(shape=(), dtype="int", depends=("estimate",))
+    def sensor_faults(self, t: int) -> int:
+        """How many sensor elements the guard replaced (or found frozen) at ``t``: 0 on a clean tick."""
+        return self.estimate(t).sensor_faults
 
     # -- tick transition ----------------------------------------------------------------------
     def prepare_state(self, t: int) -> None:

@@ -67,9 +67,10 @@ class SensorGuard:
     """The guard of an entity's sensor inputs (see the module docstring).
 
     ``read(t)`` returns the trusted value of each channel at ``t`` (fresh arrays, in the order of
-    ``channels``); ``commit()`` makes them the prediction base of the next tick (call it from the
-    entity's ``commit_state``, so a failed tick changes nothing). ``frozen_ticks`` 0 turns the
-    frozen test off.
+    ``channels``) and sets ``faulty`` (how many elements it replaced or found frozen);
+    ``commit()`` makes them the prediction base of the next tick (call it from the entity's
+    ``commit_state``, so a failed tick changes nothing). ``frozen_ticks`` 0 turns the frozen
+    test off.
     """
 
     def __init__(self, entity: dg.Entity, channels: Sequence[Channel], dt: float, frozen_ticks: int = 50):
@@ -112,6 +113,7 @@ class SensorGuard:
         self._channel_of = [k for k, part in enumerate(self._slices) for _ in range(part.start, part.stop)]
         self._element_names = [(c.name, i - s.start) for c, s in zip(self.channels, self._slices, strict=True)
                                for i in range(s.start, s.stop)]
+        self.faulty = 0
         self.reset()
 
     def reset(self) -> None:
@@ -140,6 +142,7 @@ class SensorGuard:
         if self._trusted is None or not unit or self._replaced is not self._zero_replaced or not self._fine(raw):
             return self._checked(t, raw)
         self._next = (raw, raw, self._zero_replaced, self._zero_same)
+        self.faulty = 0
         return self._split(raw)
 
     def _fine(self, raw: np.ndarray) -> bool:
@@ -176,10 +179,8 @@ class SensorGuard:
         if self.frozen_ticks and self._raw is not None:
             same = (same + 1) * (raw == self._raw)
         frozen = (same >= self.frozen_ticks) & self._frozen_test & ~bad if self.frozen_ticks else None
-        if not bad.any() and (frozen is None or not frozen.any()):
-            trusted = raw
-        else:
-            trusted = self._repair(t, raw, predicted, bad, frozen)
+        self.faulty = int(bad.sum()) + (0 if frozen is None else int(frozen.sum()))
+        trusted = raw if not self.faulty else self._repair(t, raw, predicted, bad, frozen)
         replaced = np.where(bad, self._replaced + 1, 0) if bad.any() else self._zero_replaced
         if not same.any():
             same = self._zero_same
@@ -239,11 +240,18 @@ class SensorGuard:
                 error = np.abs(raw[part] - predicted[part])
                 index = part.start + int(np.argmax(np.where(np.isfinite(error), error, np.inf)))
             name, element = self._element_names[index]
-            faults.append((name if whole else f"{name}[{element}]", *self._cause(index, raw[index], predicted)))
+            cause, detail = self._cause(index, raw[index], predicted)
+            where = self._source(channel)
+            faults.append((name if whole else f"{name}[{element}]", cause, f"{where}: {detail}" if detail else where))
         for signal, cause, detail in faults[:MAX_NAMED]:
             self.entity.report_fault(t, signal, cause, action, detail)
         if len(faults) > MAX_NAMED:
             self.entity.report_fault(t, "sensors", "more bad elements", action, f"{len(faults) - MAX_NAMED} more")
+
+    def _source(self, channel: int) -> str:
+        """``from <the plugged output>`` (where the bad reading came from), or nothing."""
+        source = getattr(self._inputs[channel], "source", None)
+        return f"from {source.full_name}" if source is not None else ""
 
     def _cause(self, index: int, value: float, predicted: np.ndarray) -> tuple[str, str]:
         """What is wrong with the element ``index`` of the reading, and the numbers."""
