@@ -270,8 +270,8 @@ def _convert(doc: Document, node: yaml.Node, path: tuple[Any, ...], seen: set[in
              loader: yaml.SafeLoader) -> Any:
     if id(node) in seen:
         raise doc.error("anchors and aliases are not allowed in graph files", path)
-    if len(path) >= MAX_DEPTH:
-        raise _node_error(doc, _too_deep(), node, path)
+    if len(path) >= MAX_DEPTH:  # the key: the first 8 of the path's 64
+        raise _node_error(doc, _too_deep(), node, path[:8])
     if len(seen) >= MAX_NODES:
         raise _node_error(doc, _too_many(), node, path)
     seen.add(id(node))
