@@ -162,3 +162,105 @@ def test_a_value_that_changes_shape_fails_its_tick_before_anything_commits(tmp_p
         g.run(ticks=10)
     assert g.t == 3 and g["dev"].x.time == 3  # the failed tick committed nothing: the loop can resume
     assert recorder.data()["dev.x"].tolist() == [0.0, 1.0, 2.0]  # and the rows before it are all there
+
+
+# -- faults -------------------------------------------------------------------------------------
+
+class Flaky(dg.Entity):
+    """y = u, except at tick 2, where y had bad data: 0 is used instead and a fault reported."""
+
+    u = dg.Input(shape=())
+
+    @dg.output(shape=(), depends=("u", "t"))
+    def y(self, t):
+        if t == 2:
+            self.report_fault(t, "y", "NaN", "replaced by 0", "nan")
+            return 0.0
+        return self.u(t)
+
+
+def faulty_graph(tmp_path: Path, rerun: str = "off") -> dg.Graph:
+    g = dg.Graph(dt=0.01, name="rec_faults")
+    g.add(Ticker("dev"), Flaky("flaky"))
+    g.plug("dev.x", "flaky.u")
+    g.add(Recorder("rec", signals=["dev.x", "flaky.y"], rerun=rerun, rrd_path=str(tmp_path / "faults.rrd"),
+                   npz_path=str(tmp_path / "faults.npz")))
+    return g
+
+
+FAULT_ARRAYS = {"fault_tick": [2], "fault_signal": ["flaky.y"], "fault_cause": ["NaN"],
+                "fault_action": ["replaced by 0"], "fault_detail": ["nan"]}
+
+
+def test_the_faults_of_the_recorded_ticks_are_in_the_data(tmp_path):
+    g = faulty_graph(tmp_path)
+    g.run(ticks=5)
+    data = g["rec"].data()
+    assert data["flaky.y"].tolist() == [0.0, 1.0, 0.0, 3.0, 4.0]
+    assert data["degraded"].dtype == bool and data["degraded"].tolist() == [False, False, True, False, False]
+    for key, value in FAULT_ARRAYS.items():
+        assert data[key].tolist() == value, key
+    assert data["fault_tick"].dtype == np.int64
+
+
+def test_the_npz_holds_the_faults_and_loads_without_pickle(tmp_path):
+    g = faulty_graph(tmp_path)
+    g.run(ticks=5)
+    g.close()
+    with np.load(tmp_path / "faults.npz") as data:  # allow_pickle=False: plain string arrays
+        assert data["degraded"].tolist() == [False, False, True, False, False]
+        for key, value in FAULT_ARRAYS.items():
+            assert data[key].tolist() == value, key
+        assert data["fault_signal"].dtype.kind == "U"
+
+
+def test_a_run_without_fault_records_empty_fault_arrays(tmp_path):
+    g = build(tmp_path, rerun="off")
+    g.run(ticks=4)
+    g.close()
+    with np.load(tmp_path / "run.npz") as data:
+        assert data["degraded"].tolist() == [False] * 4
+        assert all(data[key].shape == (0,) for key in FAULT_ARRAYS)
+
+
+def test_a_failed_tick_leaves_no_fault_and_its_retry_records_it_once(tmp_path):
+    class Bomb(dg.Entity):
+        observes = True  # observes after the recorder: the tick fails once its row is read
+
+        def setup(self):
+            self.armed = True
+
+        def observe(self, t):
+            if t == 2 and self.armed:
+                self.armed = False
+                raise RuntimeError("boom")
+
+    g = faulty_graph(tmp_path)
+    g.add(Bomb("bomb"))
+    g.run(ticks=2)
+    with pytest.raises(RuntimeError, match="boom"):
+        g.step()
+    data = g["rec"].data()
+    assert data["tick"].tolist() == [0, 1] and not data["degraded"].any() and data["fault_tick"].size == 0
+    g.run(ticks=3)
+    data = g["rec"].data()
+    assert data["tick"].tolist() == [0, 1, 2, 3, 4] and data["degraded"].tolist() == [False, False, True, False, False]
+    assert data["fault_tick"].tolist() == [2] and g.fault_log.degraded_ticks == 1
+
+
+def test_the_rrd_has_the_faults_text_log(tmp_path):
+    import rerun.chunk as chunk
+
+    g = faulty_graph(tmp_path, rerun="save")
+    g.run(ticks=5)
+    g.close()
+    assert (tmp_path / "faults.rrd").stat().st_size > 0
+    logged = []
+    for ch in chunk.RrdReader(str(tmp_path / "faults.rrd")).stream():
+        batch = ch.to_record_batch()
+        if str(ch.entity_path) == "/faults" and "TextLog:text" in batch.schema.names:
+            logged += zip(batch.column("tick").to_pylist(), batch.column("TextLog:text").to_pylist(),
+                          batch.column("TextLog:level").to_pylist(), strict=True)
+    assert logged == [(2, ["tick 2: flaky.y: NaN (nan); replaced by 0"], ["WARN"])]
+    ticks, values = read_series(str(tmp_path / "faults.rrd"))["/signals/flaky/y"]
+    assert ticks.tolist() == [0, 1, 2, 3, 4] and values.ravel().tolist() == [0.0, 1.0, 0.0, 3.0, 4.0]

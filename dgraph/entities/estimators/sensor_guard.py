@@ -14,16 +14,21 @@ and hands over a value the estimator can trust:
   reading that stays off by a constant is indistinguishable from a real change once the bound
   has grown past the offset: ``growth`` (``max_step / 100`` by default: an offset of 2
   ``max_step`` is refused for 100 ticks) sets how long that takes;
-- **frozen**: bit for bit the same for ``frozen_ticks`` ticks in a row (a sensor whose driver
-  stopped; a real reading always carries noise, a simulated one always moves a little);
-- a **quaternion** (``Channel.quaternion``) is also refused as a whole when its norm is not 1
-  within 1 %, and is compared with its prediction up to its sign (``q`` and ``-q`` are the same
-  rotation: a reading that flips sign is turned back, not refused).
+- **frozen**: bit for bit the same as the last reading ``frozen_ticks`` times in a row (a
+  sensor whose driver stopped; a real reading always carries noise, a simulated one always
+  moves a little); an exact 0 is not taken for frozen (a joint at rest in a noiseless
+  simulation, an unloaded axis);
+- a **quaternion** (``Channel.quaternion``) is refused as a whole (one bad element makes it no
+  rotation), also when its norm is not 1 within 1 %, and is compared with its prediction up to
+  its sign (``q`` and ``-q`` are the same rotation: a reading that flips sign is turned back,
+  not refused).
 
 A refused element is replaced by its prediction, the tick goes on, and a fault is reported
 (:mod:`dgraph.faults`) naming ``entity.input[index]``, the cause and the value. A frozen element
 is reported; a frozen position is replaced by its prediction, a frozen reading without a rate is
 kept (there is nothing better to use). The trusted values are what the next tick predicts from.
+The first reading has no prediction: a bad element there is filled with a value in its range
+(the identity for a quaternion), checked for range only until it reads good once.
 
 Cost: the readings are checked together, as one vector (a handful of numpy operations per
 tick); only a tick with a bad element looks at the elements one by one.
@@ -124,7 +129,8 @@ class SensorGuard:
         self._replaced = self._zero_replaced           # consecutive ticks each element was replaced
         self._same = self._zero_same                   # consecutive ticks each element was bit-identical
         self._tolerance = self._step                   # max_step + growth replaced
-        self._next: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+        self._unknown: np.ndarray | None = None        # elements never read good (filled at the first tick)
+        self._next: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | None = None
         self._deviation, self._within = np.empty(n), np.empty(n, dtype=bool)
 
     def prediction(self) -> np.ndarray:
@@ -141,7 +147,7 @@ class SensorGuard:
         unit = self._orient_quaternions(raw) if self._quaternions else True
         if self._trusted is None or not unit or self._replaced is not self._zero_replaced or not self._fine(raw):
             return self._checked(t, raw)
-        self._next = (raw, raw, self._zero_replaced, self._zero_same)
+        self._next = (raw, raw, self._zero_replaced, self._zero_same, None)
         self.faulty = 0
         return self._split(raw)
 
@@ -169,7 +175,8 @@ class SensorGuard:
         first = self._trusted is None
         predicted = raw if first else self.prediction()
         in_range = (raw >= self._lower) & (raw <= self._upper) & np.isfinite(raw)  # NaN compares false
-        bad = ~in_range if first else ~((np.abs(raw - predicted) <= self._tolerance) & in_range)
+        tolerance = self._tolerance if self._unknown is None else np.where(self._unknown, np.inf, self._tolerance)
+        bad = ~in_range if first else ~((np.abs(raw - predicted) <= tolerance) & in_range)
         for part in self._not_unit:
             bad[part] = True
         for part in self._quaternions:  # refused as a whole: a quaternion mixed of two is no rotation
@@ -178,13 +185,15 @@ class SensorGuard:
         same = self._same
         if self.frozen_ticks and self._raw is not None:
             same = (same + 1) * (raw == self._raw)
-        frozen = (same >= self.frozen_ticks) & self._frozen_test & ~bad if self.frozen_ticks else None
+        # an exact 0 is not taken for frozen: a joint at rest in a noiseless simulation, an unloaded sensor
+        frozen = (same >= self.frozen_ticks) & self._frozen_test & ~bad & (raw != 0.0) if self.frozen_ticks else None
         self.faulty = int(bad.sum()) + (0 if frozen is None else int(frozen.sum()))
         trusted = raw if not self.faulty else self._repair(t, raw, predicted, bad, frozen)
         replaced = np.where(bad, self._replaced + 1, 0) if bad.any() else self._zero_replaced
         if not same.any():
             same = self._zero_same
-        self._next = (trusted, raw, replaced, same)
+        unknown = bad if first else None if self._unknown is None else self._unknown & bad
+        self._next = (trusted, raw, replaced, same, unknown if unknown is not None and unknown.any() else None)
         return self._split(trusted)
 
     def _orient_quaternions(self, raw: np.ndarray) -> bool:
@@ -242,7 +251,8 @@ class SensorGuard:
             name, element = self._element_names[index]
             cause, detail = self._cause(index, raw[index], predicted)
             where = self._source(channel)
-            faults.append((name if whole else f"{name}[{element}]", cause, f"{where}: {detail}" if detail else where))
+            faults.append((name if whole else f"{name}[{element}]", cause,
+                           f"{where}: {detail}" if where and detail else where or detail))
         for signal, cause, detail in faults[:MAX_NAMED]:
             self.entity.report_fault(t, signal, cause, action, detail)
         if len(faults) > MAX_NAMED:
@@ -267,10 +277,17 @@ class SensorGuard:
         return "jump", f"{value:.6g}, predicted {predicted[index]:.6g} (tolerance {self._tolerance[index]:.3g})"
 
     def _report_frozen(self, t: int, frozen: np.ndarray) -> None:
-        for index in np.flatnonzero(frozen)[:MAX_NAMED]:
+        """One fault per frozen element (per quaternion: one), the first :data:`MAX_NAMED`."""
+        seen: set[int] = set()
+        for index in np.flatnonzero(frozen).tolist():
+            channel = self._channel_of[index]
+            whole = self.channels[channel].quaternion
+            if (whole and channel in seen) or len(seen) >= MAX_NAMED:
+                continue
+            seen.add(channel if whole else -1 - index)
             name, element = self._element_names[index]
             action = "replaced by its prediction" if self._has_position[index] else "kept (nothing better)"
-            self.entity.report_fault(t, f"{name}[{element}]", "frozen", action,
+            self.entity.report_fault(t, name if whole else f"{name}[{element}]", "frozen", action,
                                      f"the same for {self._same[index] + 1} ticks")
 
     def _split(self, values: np.ndarray) -> list[np.ndarray]:
@@ -281,7 +298,7 @@ class SensorGuard:
     def commit(self) -> None:
         """The tick committed: its trusted readings become the base of the next prediction."""
         if self._next is not None:
-            self._trusted, self._raw, replaced, self._same = self._next
+            self._trusted, self._raw, replaced, self._same, self._unknown = self._next
             if replaced is not self._replaced:
                 self._replaced = replaced
                 self._tolerance = self._step if replaced is self._zero_replaced else \
