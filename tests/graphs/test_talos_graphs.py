@@ -159,3 +159,14 @@ def test_cache_off_and_dependency_check_give_identical_results():
                 assert np.array_equal(values, runs[mode][key]), f"{mode}: {key}"
             else:
                 assert np.allclose(values, runs[mode][key], rtol=0.0, atol=1e-9), f"{mode}: {key}"
+
+
+def test_the_standing_graph_runs_in_the_debug_checks_without_a_false_alarm():
+    """``dgraph run --debug-checks`` on the real graph (design rule 5, the time included): 300 ticks
+    of standing, in which the held CoM reference is served from its cache at every tick, so it is
+    computed again and compared at each of them, and kept as it was."""
+    graph = dg.load(str(ROOT / "graphs" / "talos_standing.yaml"), {"recorder.rerun": "off", "view.rerun": "off"})
+    graph.check_values = graph.check_dependencies = True
+    with graph:
+        graph.run(ticks=300, progress=False)
+    assert graph.t == 300 and graph["com_reference"].output.count == 1
