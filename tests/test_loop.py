@@ -191,10 +191,10 @@ def test_recorders_keep_no_row_of_a_failed_tick(graph):
     a = graph.add(Recorder("a", signals=["d.output"], rerun="off"))
     b = graph.add(Recorder("b", signals=["sw.output"], rerun="off"))
     graph.run(ticks=2)
-    sw.selection.set(5)  # b fails after a has read its row
-    with pytest.raises(dg.ComputeError):
+    sw.in1.reset()  # b fails after a has read its row: the selected input is neither plugged nor set
+    with pytest.raises(dg.UnpluggedInputError):
         graph.step()
-    sw.selection.set(1)
+    sw.in1.set(1.0)
     graph.run(ticks=2)
     assert a.data()["tick"].tolist() == b.data()["tick"].tolist() == [0, 1, 2, 3]
 
