@@ -191,6 +191,7 @@ def test_recorders_keep_no_row_of_a_failed_tick(graph):
     a = graph.add(Recorder("a", signals=["d.output"], rerun="off"))
     b = graph.add(Recorder("b", signals=["sw.output"], rerun="off"))
     graph.run(ticks=2)
+    sw.selection.set(1)
     sw.in1.reset()  # b fails after a has read its row: the selected input is neither plugged nor set
     with pytest.raises(dg.UnpluggedInputError):
         graph.step()
