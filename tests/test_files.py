@@ -672,12 +672,19 @@ def graph_summary(graph: dg.Graph, folder: Path) -> dict:
             "set": {i.full_name: to_plain(i.value, "") for e in graph for i in e.inputs.values() if i.is_set}}
 
 
+CHANGED_PLUGS = {  # (source, target) then -> now
+    # the ZMP estimator reads the ankle wrenches that the estimator's sensor guard trusts (issue 12)
+    ("device.ft_left_ankle", "zmp.ft_left_ankle"): ("estimator.checked_ft_left_ankle", "zmp.ft_left_ankle"),
+    ("device.ft_right_ankle", "zmp.ft_right_ankle"): ("estimator.checked_ft_right_ankle", "zmp.ft_right_ankle"),
+}
+
+
 @pytest.mark.parametrize("name", ["pd_double_integrator", "talos_standing", "talos_sway", "talos_push_tank",
                                   "talos_push_no_tank", "talos_tsid_position", "talos_ik_position"])
 def test_the_composed_graphs_are_the_graphs_the_self_contained_files_described(name, tmp_path):
     """The composition changed how the files are written, not the graphs: each builds what its
-    self-contained version at SELF_CONTAINED built. A later change that means to change a graph
-    takes that graph out of this list."""
+    self-contained version at SELF_CONTAINED built, but for the changes made on purpose since
+    (:data:`CHANGED_PLUGS`). A later change that means to change a graph says so there."""
     import shutil
     import subprocess
 
@@ -693,6 +700,7 @@ def test_the_composed_graphs_are_the_graphs_the_self_contained_files_described(n
             ["git", "show", f"{SELF_CONTAINED}:graphs/talos_push_tank.yaml"], cwd=ROOT, check=True,
             capture_output=True, text=True).stdout)
     before = graph_summary(dg.load(tmp_path / f"{name}.yaml"), tmp_path)
+    before["plugs"] = {CHANGED_PLUGS.get(plug, plug) for plug in before["plugs"]}
     assert graph_summary(dg.load(ROOT / "graphs" / f"{name}.yaml"), ROOT / "graphs") == before
 
 

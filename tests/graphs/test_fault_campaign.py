@@ -142,3 +142,20 @@ def test_a_graph_file_with_a_glitch_runs_and_reports_its_degraded_tick(tmp_path)
     data = np.load(npz)
     assert data["fault_tick"].tolist() == [200] and data["fault_signal"].tolist() == ["estimator.encoder_position[3]"]
     assert data["degraded"].sum() == 1 and data["tick"][data["degraded"]].tolist() == [200]
+
+
+def test_the_position_scheme_reads_the_guarded_ankle_wrenches():
+    """The TSID-position graph's ZMP estimator reads the estimator's checked wrenches: a NaN on
+    an ankle sensor costs one degraded tick there too, value checks on."""
+    graph = dg.load(str(ROOT / "graphs" / "talos_tsid_position.yaml"), {"recorder.rerun": "off"})
+    graph.check_values = True
+    fault = graph.add(SensorFault("fault", kind="nan", start=0.3, ticks=1))
+    graph.unplug("estimator.ft_left_ankle")
+    graph.plug("device.ft_left_ankle", fault.reading)
+    graph.plug(fault.output, "estimator.ft_left_ankle")
+    with graph:
+        graph.run(duration=0.8, progress=False)
+    assert graph.t == 800 and not graph["device"].fallen.value
+    assert graph.fault_log.degraded_ticks == 1
+    assert {f.signal for f in graph.fault_log.faults} == {f"estimator.ft_left_ankle[{i}]" for i in range(4)} | \
+        {"estimator.sensors"}

@@ -32,15 +32,15 @@ _HEAD = 9
 class Estimate:
     """Everything computed at one tick (the ``estimate`` output); read-only for readers."""
 
-    __slots__ = ("anchored", "anchors", "base_velocity_world", "contacts", "next_prediction", "q", "sensor_faults",
-                 "v")
+    __slots__ = ("anchored", "anchors", "base_velocity_world", "contacts", "next_prediction", "q", "readings",
+                 "sensor_faults", "v")
 
     def __init__(self, q: np.ndarray, v: np.ndarray, contacts: list[bool], anchored: list[bool],
                  anchors: list[np.ndarray | None], base_velocity_world: np.ndarray, next_prediction: np.ndarray,
-                 sensor_faults: int = 0):
+                 readings: list[np.ndarray], sensor_faults: int = 0):
         self.q, self.v, self.contacts, self.anchored, self.anchors = q, v, contacts, anchored, anchors
         self.base_velocity_world, self.next_prediction = base_velocity_world, next_prediction
-        self.sensor_faults = sensor_faults
+        self.readings, self.sensor_faults = readings, sensor_faults
 
 
 @dg.register
@@ -129,7 +129,9 @@ class FloatingBaseEstimator(dg.Entity):
     Inputs: ``imu_orientation``, ``imu_angular_velocity``, ``imu_linear_acceleration``,
     ``encoder_position``, ``encoder_velocity``, ``ft_left_ankle``, ``ft_right_ankle``.
     Outputs: ``q``, ``v``, ``contact_left``, ``contact_right``, ``base_velocity_world``,
-    ``sensor_faults`` (elements replaced at the tick), ``estimate`` (everything, as an object).
+    ``sensor_faults`` (elements replaced at the tick), ``checked_ft_left_ankle`` and
+    ``checked_ft_right_ankle`` (the wrenches as trusted, for other readers of the sensors),
+    ``estimate`` (everything, as an object).
     States: ``anchor_left``, ``anchor_right``, ``anchored_left``, ``anchored_right``,
     ``prediction`` (``[x, p~]``, staged together every tick), ``velocity_initialised``.
     """
@@ -259,7 +261,8 @@ class FloatingBaseEstimator(dg.Entity):
         "anchored_left", "anchored_right", "prediction", "velocity_initialised"))
     def estimate(self, t: int) -> Any:
         """Everything estimated at ``t`` (an ``Estimate``: q, v, contacts, anchors, next states)."""
-        orientation, gyro, acceleration, q_j, qd_j, ft_left, ft_right = self.readings(t)
+        readings = self.readings(t)
+        orientation, gyro, acceleration, q_j, qd_j, ft_left, ft_right = readings
         frames, motions = self._kinematics.forward(q_j, qd_j)  # R_BX, r_BX; v_X, w_X (K), for left, right, I, S_k
         r_wi = quat_to_rows(orientation.tolist())
         r_wb, w_b, u_i = _orientation(r_wi, frames[2], motions[2], gyro.tolist())  # (1), (2)
@@ -277,7 +280,7 @@ class FloatingBaseEstimator(dg.Entity):
         values = self._values(dt, q_j, qd_j, acceleration, r_wi, r_wb, w_b, u_i, p_wb, v_i)             # (6), (7)
         v_start = _HEAD + self.nq
         return Estimate(values[_HEAD:v_start], values[v_start:], contacts, anchored, anchors, values[6:_HEAD],
-                        values[:6], self._guard.faulty if self._guard is not None else 0)
+                        values[:6], readings, self._guard.faulty if self._guard is not None else 0)
 
     def _position(self, t: int, r_wb: tuple[float, ...], frames: list[list[float]], forces: list[float],
                   contacts: list[bool], anchored: list[bool]) -> tuple[list[float], list[np.ndarray | None]]:
@@ -384,6 +387,17 @@ class FloatingBaseEstimator(dg.Entity):
     def base_velocity_world(self, t: int) -> Any:
         """Fused linear velocity of the base origin in the world frame."""
         return self.estimate(t).base_velocity_world
+
+    @dg.output(shape=(6,), depends=("estimate",))
+    def checked_ft_left_ankle(self, t: int) -> Any:
+        """The left ankle wrench as the guard trusts it (what the estimate used): for the other
+        readers of the sensor, such as a ZMP estimator."""
+        return self.estimate(t).readings[5]
+
+    @dg.output(shape=(6,), depends=("estimate",))
+    def checked_ft_right_ankle(self, t: int) -> Any:
+        """The right ankle wrench as the guard trusts it."""
+        return self.estimate(t).readings[6]
 
     @dg.output(shape=(), dtype="int", depends=("estimate",))
     def sensor_faults(self, t: int) -> int:
