@@ -96,11 +96,15 @@ class _TimeCheck:
 
     It sits last in its clock's list of time-varying outputs (it is not one), so the clock calls
     :meth:`invalidate` each time it moves, after invalidating the real ones; at a new latest tick
-    every watched output that its cache would serve there is computed again and compared."""
+    every watched output that its cache would serve there is computed again and compared. The
+    value of that computation is kept until the output's next check: a value may share buffers
+    with the computation that made it, and the cached one may read them as long as the latest
+    computation is alive and equal (a RobotState and its Pinocchio data)."""
 
     def __init__(self, clock: Clock):
         self.clock = clock
         self.outputs: dict[int, Output] = {}
+        self.kept: dict[int, Any] = {}
 
     @staticmethod
     def of(clock: Clock) -> _TimeCheck:
@@ -120,6 +124,7 @@ class _TimeCheck:
                 self.outputs[id(output)] = output
             else:
                 self.outputs.pop(id(output), None)
+                self.kept.pop(id(output), None)
         if not self.outputs:
             self.clock.time_varying.remove(self)
 
@@ -131,7 +136,7 @@ class _TimeCheck:
             return
         for output in list(self.outputs.values()):
             if _served_from_cache(output, t, clock):
-                _compare_with_a_new_computation(output, t)
+                self.kept[id(output)] = _compare_with_a_new_computation(output, t)
 
 
 def _served_from_cache(output: Output, t: int, clock: Clock) -> bool:
@@ -149,9 +154,10 @@ def _served_from_cache(output: Output, t: int, clock: Clock) -> bool:
     return True
 
 
-def _compare_with_a_new_computation(output: Output, t: int) -> None:
+def _compare_with_a_new_computation(output: Output, t: int) -> Any:
     """Compute ``output`` at ``t`` and restore its cache, stamp and counters; raise
-    :class:`DependencyError` if the value differs from the cached one (or the computation fails)."""
+    :class:`DependencyError` if the value differs from the cached one (or the computation fails),
+    else return the new value."""
     cached, stamp, count, duration = output._value, output._time, output.count, output.total_duration
     try:
         value = output._compute(t)
@@ -164,6 +170,7 @@ def _compare_with_a_new_computation(output: Output, t: int) -> None:
         output._stale = False
     if differs(cached, value):
         raise _time_error(output, t, stamp, f"computed again at tick {t} it differs from its value of tick {stamp}")
+    return value
 
 
 def _time_error(output: Output, t: int, stamp: int | None, what: str) -> DependencyError:

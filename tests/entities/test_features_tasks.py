@@ -295,3 +295,21 @@ def test_a_zero_reference_quaternion_is_refused_where_it_is_set():
     waist.reference_orientation.set([0.0, 0.0, 0.0, 2.0])  # normalised when used
     with pytest.raises(dg.SpecError, match=r"waist\.reference_orientation: expected a unit quaternion \[x, y, z, w\]"):
         waist.reference_orientation.set(np.zeros(4))
+
+
+def test_a_robot_graph_of_constants_passes_the_dependency_checks_tick_after_tick():
+    """In the dependency-check mode the held robot state is computed again at every tick and
+    compared (it declares no time): the cached state stays readable for what is first read later
+    (its Pinocchio data's latest pass is the same (q, v)), and nothing is reported."""
+    _, q, v = random_state(11)
+    g, robot = robot_graph(q, v)
+    com, waist, task = g.add(CenterOfMass("com"), FramePose("waist", frame="base_link"), Task("task"))
+    com.reference_position.set(np.zeros(3))
+    for feature in ("com", "waist"):
+        g.plug("robot.state", f"{feature}.robot")
+    g.plug("com.feature", "task.feature")
+    g.check_dependencies = True
+    equation = task.equation(0)
+    for t in range(1, 4):
+        assert task.equation(t) is equation and robot.state.count == 1
+    assert waist.feature(4).error.shape == (6,) and robot.state.time == 0  # a frame first read at tick 4
