@@ -717,8 +717,9 @@ def test_the_readme_shows_the_sway_scenario_as_shipped():
 TRAJECTORY = "name: t\nentities:\n  ref: {{type: TrajectoryFile, params: {{path: {path}}}}}\n"
 
 
-def refused(call, *args, within: float = 1.0) -> dg.GraphFileError:
-    """The GraphFileError of ``call(*args)``, which must come within ``within`` seconds."""
+def refused(call, *args, within: float = 3.0) -> dg.GraphFileError:
+    """The GraphFileError of ``call(*args)``, which must come within ``within`` seconds (these
+    take milliseconds; the margin is for a loaded machine, what is tested is that nothing hangs)."""
     start = time.perf_counter()
     with pytest.raises(dg.GraphFileError) as info:
         call(*args)
@@ -871,7 +872,7 @@ def test_pathological_nesting_is_refused_quickly_with_its_line(text, line, loade
 
     if loader == "python":
         monkeypatch.setattr(source, "_SAFE_LOADER", source.PythonLoader)
-    error = refused(loads, text, within=0.2)
+    error = refused(loads, text, within=1.0)
     assert f"nested more than {MAX_DEPTH} deep" in str(error) and len(error.key or "") < 40, str(error)
     assert error.line == line or (line is None and error.line is not None), str(error)
 
