@@ -65,7 +65,9 @@ class Channel:
     frozen: bool = True
     quaternion: bool = False
 
+
 QUATERNION_NORM_TOLERANCE = 0.01
+"""How far from 1 a quaternion's norm may be (1 %)."""
 
 
 class SensorGuard:
@@ -91,7 +93,6 @@ class SensorGuard:
         by_name = {c.name: (c, s, size) for c, s, size in zip(self.channels, self._slices, sizes, strict=True)}
         self._lower, self._upper, self._step, self._growth = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
         self._frozen_test = np.zeros(n, dtype=bool)
-        self._rate_of = np.zeros(n)  # dt where an element has a rate, else 0
         self._position_slices: list[tuple[slice, slice]] = []
         self._quaternions = [s for c, s, _ in by_name.values() if c.quaternion]
         self._not_unit: list[slice] = []
@@ -113,6 +114,7 @@ class SensorGuard:
         self.frozen_ticks = int(frozen_ticks)
         self._names = [c.name for c in self.channels]
         self._flat = all(len(inp.spec.shape) == 1 for inp in self._inputs)
+        self._bounded = bool(np.isfinite(self._lower).all() and np.isfinite(self._upper).all())
         self._zero_replaced = np.zeros(n, dtype=np.int64)  # shared "none": compared by identity
         self._zero_same = np.zeros(n, dtype=np.int64)
         self._channel_of = [k for k, part in enumerate(self._slices) for _ in range(part.start, part.stop)]
@@ -125,6 +127,7 @@ class SensorGuard:
         """No trusted value yet: the first reading is checked for finiteness and range only."""
         n = len(self._lower)
         self._trusted: np.ndarray | None = None
+        self._predicted: np.ndarray | None = None
         self._raw: np.ndarray | None = None            # the last reading, as read (the frozen test)
         self._replaced = self._zero_replaced           # consecutive ticks each element was replaced
         self._same = self._zero_same                   # consecutive ticks each element was bit-identical
@@ -133,18 +136,24 @@ class SensorGuard:
         self._next: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | None = None
         self._deviation, self._within = np.empty(n), np.empty(n, dtype=bool)
 
-    def prediction(self) -> np.ndarray:
-        """Where each element should be at this tick: the trusted value of the last one, a
-        position moved by ``dt`` times its trusted rate."""
-        predicted = self._trusted.copy()
+    def prediction(self) -> np.ndarray | None:
+        """Where each element should be at this tick (None before the first reading): the
+        trusted value of the last one, a position moved by ``dt`` times its trusted rate;
+        computed once, when the last tick committed."""
+        return self._predicted
+
+    def _predict(self, trusted: np.ndarray) -> np.ndarray:
+        predicted = trusted.copy()
         for position, rate in self._position_slices:
-            predicted[position] += self.dt * self._trusted[rate]
+            predicted[position] += self.dt * trusted[rate]
+        predicted.flags.writeable = False
         return predicted
 
     def read(self, t: int) -> list[np.ndarray]:
         """The trusted readings at ``t`` (faults reported for the elements replaced)."""
         raw = np.concatenate([inp(t) for inp in self._inputs], axis=None)
         unit = self._orient_quaternions(raw) if self._quaternions else True
+        raw.flags.writeable = False  # handed out, and kept as the next prediction's base
         if self._trusted is None or not unit or self._replaced is not self._zero_replaced or not self._fine(raw):
             return self._checked(t, raw)
         self._next = (raw, raw, self._zero_replaced, self._zero_same, None)
@@ -153,13 +162,12 @@ class SensorGuard:
 
     def _fine(self, raw: np.ndarray) -> bool:
         """The common case, in a few numpy operations on preallocated buffers: every element
-        within ``max_step`` of its prediction and in range, none the same as at the last tick."""
-        deviation, within, trusted = self._deviation, self._within, self._trusted
-        if not math.isfinite(np.vdot(raw, raw)):
+        within ``max_step`` of its prediction and in range (finite bounds refuse NaN and inf
+        too), none that could be frozen the same as at the last tick."""
+        deviation, within = self._deviation, self._within
+        if not self._bounded and not math.isfinite(np.vdot(raw, raw)):
             return False
-        np.subtract(raw, trusted, out=deviation)
-        for position, rate in self._position_slices:
-            deviation[position] -= self.dt * trusted[rate]
+        np.subtract(raw, self._predicted, out=deviation)
         np.abs(deviation, out=deviation)
         n = len(raw)  # count_nonzero is the cheapest reduction of a boolean array (4x .all())
         if np.count_nonzero(np.less_equal(deviation, self._step, out=within)) != n:
@@ -168,12 +176,14 @@ class SensorGuard:
             return False
         if np.count_nonzero(np.less_equal(raw, self._upper, out=within)) != n:
             return False
-        return not (self.frozen_ticks and np.count_nonzero(np.equal(raw, self._raw, out=within)))
+        if not (self.frozen_ticks and np.count_nonzero(np.equal(raw, self._raw, out=within))):
+            return True
+        return not (within & self._frozen_test & (raw != 0.0)).any()  # a repeated 0 cannot be frozen
 
     def _checked(self, t: int, raw: np.ndarray) -> list[np.ndarray]:
         """Element by element: which are bad or frozen, the repaired reading, the faults."""
         first = self._trusted is None
-        predicted = raw if first else self.prediction()
+        predicted = raw if first else self._predicted
         in_range = (raw >= self._lower) & (raw <= self._upper) & np.isfinite(raw)  # NaN compares false
         tolerance = self._tolerance if self._unknown is None else np.where(self._unknown, np.inf, self._tolerance)
         bad = ~in_range if first else ~((np.abs(raw - predicted) <= tolerance) & in_range)
@@ -185,16 +195,30 @@ class SensorGuard:
         same = self._same
         if self.frozen_ticks and self._raw is not None:
             same = (same + 1) * (raw == self._raw)
-        # an exact 0 is not taken for frozen: a joint at rest in a noiseless simulation, an unloaded sensor
-        frozen = (same >= self.frozen_ticks) & self._frozen_test & ~bad & (raw != 0.0) if self.frozen_ticks else None
+        frozen = self._frozen(same, raw, bad) if self.frozen_ticks else None
         self.faulty = int(bad.sum()) + (0 if frozen is None else int(frozen.sum()))
         trusted = raw if not self.faulty else self._repair(t, raw, predicted, bad, frozen)
         replaced = np.where(bad, self._replaced + 1, 0) if bad.any() else self._zero_replaced
         if not same.any():
             same = self._zero_same
-        unknown = bad if first else None if self._unknown is None else self._unknown & bad
+        unknown = bad.copy() if first else None if self._unknown is None else self._unknown & bad
+        if unknown is not None:  # a position whose rate is unknown has no prediction either
+            for position, rate in self._position_slices:
+                unknown[position] |= unknown[rate]
         self._next = (trusted, raw, replaced, same, unknown if unknown is not None and unknown.any() else None)
         return self._split(trusted)
+
+    def _frozen(self, same: np.ndarray, raw: np.ndarray, bad: np.ndarray) -> np.ndarray:
+        """The elements read bit-identical ``frozen_ticks`` times that are not at rest: an exact 0
+        is never frozen (a joint at rest in a noiseless simulation, an unloaded axis), nor a
+        position whose trusted rate moves it by less than ``max_step`` over ``frozen_ticks``
+        ticks (a quantized encoder at rest repeats its value)."""
+        frozen = (same >= self.frozen_ticks) & self._frozen_test & ~bad & (raw != 0.0)
+        if frozen.any() and self._position_slices:
+            for position, rate in self._position_slices:
+                travel = np.abs(self._trusted[rate]) * (self.frozen_ticks * self.dt)
+                frozen[position] &= travel > self._step[position]
+        return frozen
 
     def _orient_quaternions(self, raw: np.ndarray) -> bool:
         """Whether every quaternion's norm is 1 within the tolerance (those that are not are
@@ -220,8 +244,9 @@ class SensorGuard:
         if frozen is not None:
             held = frozen & self._has_position
             trusted[held] = predicted[held]
-        if self._trusted is None:
-            fill = np.clip(np.nan_to_num(raw[bad], nan=0.0), self._lower[bad], self._upper[bad])
+        if self._trusted is None:  # NaN: 0, then clipped; an infinity: the range's end, or 0 if it has none
+            value = np.nan_to_num(raw[bad], nan=0.0, posinf=np.inf, neginf=-np.inf)
+            fill = np.clip(value, self._lower[bad], self._upper[bad])
             trusted[bad] = np.nan_to_num(fill, posinf=0.0, neginf=0.0)
             for part in self._quaternions:  # clipped elements are no rotation: the identity
                 if bad[part].any():
@@ -232,6 +257,7 @@ class SensorGuard:
                      else "replaced by a value in range (no earlier reading)")
         if frozen is not None and frozen.any():
             self._report_frozen(t, frozen)
+        trusted.flags.writeable = False  # handed out, and kept as the next prediction's base
         return trusted
 
     def _report(self, t: int, raw: np.ndarray, predicted: np.ndarray, bad: np.ndarray, action: str) -> None:
@@ -277,20 +303,27 @@ class SensorGuard:
         return "jump", f"{value:.6g}, predicted {predicted[index]:.6g} (tolerance {self._tolerance[index]:.3g})"
 
     def _report_frozen(self, t: int, frozen: np.ndarray) -> None:
-        """One fault per frozen element (per quaternion: one), the first :data:`MAX_NAMED`."""
-        seen: set[int] = set()
+        """One fault per frozen element (per quaternion: one), the first :data:`MAX_NAMED`
+        named, the others counted in one more."""
+        faults, seen = [], set()
         for index in np.flatnonzero(frozen).tolist():
             channel = self._channel_of[index]
             whole = self.channels[channel].quaternion
-            if (whole and channel in seen) or len(seen) >= MAX_NAMED:
+            if whole and channel in seen:
                 continue
-            seen.add(channel if whole else -1 - index)
+            seen.add(channel)
             name, element = self._element_names[index]
             action = "replaced by its prediction" if self._has_position[index] else "kept (nothing better)"
-            self.entity.report_fault(t, name if whole else f"{name}[{element}]", "frozen", action,
-                                     f"the same for {self._same[index] + 1} ticks")
+            faults.append((name if whole else f"{name}[{element}]", action,
+                           f"the same for {self._same[index] + 1} ticks"))
+        for signal, action, detail in faults[:MAX_NAMED]:
+            self.entity.report_fault(t, signal, "frozen", action, detail)
+        if len(faults) > MAX_NAMED:
+            self.entity.report_fault(t, "sensors", "more frozen elements", "as above",
+                                     f"{len(faults) - MAX_NAMED} more")
 
     def _split(self, values: np.ndarray) -> list[np.ndarray]:
+        """One read-only view of ``values`` per channel, in its input's shape."""
         if self._flat:
             return [values[part] for part in self._slices]
         return [values[part].reshape(inp.spec.shape) for part, inp in zip(self._slices, self._inputs, strict=True)]
@@ -299,6 +332,7 @@ class SensorGuard:
         """The tick committed: its trusted readings become the base of the next prediction."""
         if self._next is not None:
             self._trusted, self._raw, replaced, self._same, self._unknown = self._next
+            self._predicted = self._predict(self._trusted)
             if replaced is not self._replaced:
                 self._replaced = replaced
                 self._tolerance = self._step if replaced is self._zero_replaced else \

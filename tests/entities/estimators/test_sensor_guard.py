@@ -101,7 +101,7 @@ class Rig:
         """One tick: the trusted readings and the faults reported."""
         self.feed(**bad)
         self.log.begin(self.t)
-        values = dict(zip(NAMES, self.guard.read(self.t), strict=True))
+        values = {name: value.copy() for name, value in zip(NAMES, self.guard.read(self.t), strict=True)}
         faults = self.log.staged(self.t)
         if commit:
             self.guard.commit()
@@ -288,20 +288,24 @@ def test_a_frozen_reading_is_reported_after_frozen_ticks_repeats_and_kept():
 
 
 def test_a_frozen_position_follows_its_prediction():
-    rig = Rig(frozen_ticks=2)
+    """pos[1] moves at about 1 unit/s: over 8 ticks of 0.01 s its rate moves it by about 0.07,
+    more than max_step 0.05, so a reading stuck for 8 ticks is frozen."""
+    frozen_ticks = 8
+    rig = Rig(frozen_ticks=frozen_ticks)
     rig.run(5)
     held = GOOD["pos"][5, 1]
-    trusted = []
-    for _ in range(4):  # ticks 5..8
+    trusted = {}
+    for _ in range(frozen_ticks + 3):  # ticks 5..15: the same bits from tick 5
         values, faults = rig.tick(pos={1: held})
-        trusted.append(values["pos"][1])
-        if rig.t - 1 < 7:
+        t = rig.t - 1
+        trusted[t] = values["pos"][1]
+        if t < 5 + frozen_ticks:
             assert faults == [] and values["pos"][1] == held  # within max_step of its prediction: kept
         else:
             assert [(f.signal, f.cause, f.action) for f in faults] == [("s.pos[1]", "frozen", PREDICTED)]
-    for t in (7, 8):  # frozen: the last trusted position moved by dt times the trusted rate
-        assert trusted[t - 5] == pytest.approx(trusted[t - 6] + DT * GOOD["vel"][t - 1, 1], abs=1e-15)
-    assert trusted[3] != held
+    for t in range(5 + frozen_ticks, 5 + frozen_ticks + 3):  # the last trusted position moved by dt times its rate
+        assert trusted[t] == pytest.approx(trusted[t - 1] + DT * GOOD["vel"][t - 1, 1], abs=1e-15)
+        assert trusted[t] != held
 
 
 def test_frozen_ticks_zero_and_a_channel_without_the_test_never_report_a_frozen_reading():
@@ -410,7 +414,7 @@ def test_the_floating_base_estimator_reads_through_its_guard_unless_told_not_to(
         raw = g.add(Raw(f"raw_{name}"))
         raw.value = value
         g.plug(raw.output, est.signal(name))
-    got = dict(zip(SENSOR_INPUTS, est.readings(0), strict=True))
+    got = {name: value.copy() for name, value in zip(SENSOR_INPUTS, est.readings(0), strict=True)}
     faults = g.fault_log.staged(0)
     if not check:
         for name in SENSOR_INPUTS:
@@ -446,3 +450,25 @@ def test_an_exact_zero_is_never_taken_for_frozen():
     for _ in range(10):
         values, faults = rig.tick(wrench={3: 0.0})  # an unloaded axis, a joint at rest in a noiseless simulation
         assert faults == [] and values["wrench"][3] == 0.0
+
+
+def test_a_trusted_reading_handed_out_is_read_only_so_no_reader_can_change_the_next_prediction():
+    rig = Rig()
+    rig.run(3)
+    for bad in ({}, {"vel": {0: math.nan}}):  # the fast path and the checked one
+        rig.feed(**bad)
+        for value in rig.guard.read(rig.t):
+            with pytest.raises(ValueError, match="read-only"):
+                value[0] = 1.0
+        rig.guard.commit()
+        rig.t += 1
+
+
+def test_a_position_at_rest_repeating_its_value_is_not_frozen():
+    """A quantized encoder at rest repeats its reading: with a rate that would move it by less
+    than max_step over frozen_ticks ticks, it is not frozen (pos[1] moves by 0.02 over 2 ticks)."""
+    rig = Rig(frozen_ticks=2)
+    rig.run(5)
+    for _ in range(6):
+        values, faults = rig.tick(pos={1: GOOD["pos"][5, 1]})
+        assert not [f for f in faults if f.cause == "frozen"]
