@@ -89,6 +89,11 @@ class MujocoDevice(dg.Device):
     ``ft_right_ankle``, ``ft_left_wrist``, ``ft_right_wrist``, ``joint_torque``,
     ``contact_force_total``, ``sim_time``, ``fallen``, ``control_fault``.
 
+    The sensor states (IMU, encoders, F/T) are raw readings (``finite=None``): a NaN or an
+    infinity in one, as a real driver may hand over, is staged as it is and caught by its reader
+    (the estimator's sensor guard) instead of failing the tick; ``q`` and ``v`` stay checked
+    (with the divergence check, they are the simulation's own state).
+
     Force/torque sensors (6: force then torque, N and N m, in the sensor frame, torque about the
     sensor origin) report the wrench that the child side (foot or hand) exerts on the parent side
     (leg or arm): standing still, an ankle force along the sole normal is about +(weight carried
@@ -126,15 +131,16 @@ class MujocoDevice(dg.Device):
 
     q = dg.State(shape=("nq",), doc="configuration (Pinocchio: base position, quaternion xyzw, joints)")
     v = dg.State(shape=("nv",), doc="velocity (Pinocchio: base linear and angular in the base frame, joints)")
-    imu_orientation = dg.State(shape=(4,), doc="IMU frame orientation in the world, quaternion xyzw")
-    imu_angular_velocity = dg.State(shape=(3,), doc="IMU angular velocity in the IMU frame, rad/s")
-    imu_linear_acceleration = dg.State(shape=(3,), doc="IMU proper acceleration (a - g) in the IMU frame, m/s²")
-    encoder_position = dg.State(shape=_na, doc="actuated joint positions, rad")
-    encoder_velocity = dg.State(shape=_na, doc="actuated joint velocities, rad/s")
-    ft_left_ankle = dg.State(shape=(6,), doc="left ankle wrench (foot on leg), sensor frame")
-    ft_right_ankle = dg.State(shape=(6,), doc="right ankle wrench (foot on leg), sensor frame")
-    ft_left_wrist = dg.State(shape=(6,), doc="left wrist wrench (hand on arm), sensor frame")
-    ft_right_wrist = dg.State(shape=(6,), doc="right wrist wrench (hand on arm), sensor frame")
+    imu_orientation = dg.State(finite=None, shape=(4,), doc="IMU frame orientation in the world, quaternion xyzw")
+    imu_angular_velocity = dg.State(finite=None, shape=(3,), doc="IMU angular velocity in the IMU frame, rad/s")
+    imu_linear_acceleration = dg.State(finite=None, shape=(3,),
+                                       doc="IMU proper acceleration (a - g) in the IMU frame, m/s²")
+    encoder_position = dg.State(finite=None, shape=_na, doc="actuated joint positions, rad")
+    encoder_velocity = dg.State(finite=None, shape=_na, doc="actuated joint velocities, rad/s")
+    ft_left_ankle = dg.State(finite=None, shape=(6,), doc="left ankle wrench (foot on leg), sensor frame")
+    ft_right_ankle = dg.State(finite=None, shape=(6,), doc="right ankle wrench (foot on leg), sensor frame")
+    ft_left_wrist = dg.State(finite=None, shape=(6,), doc="left wrist wrench (hand on arm), sensor frame")
+    ft_right_wrist = dg.State(finite=None, shape=(6,), doc="right wrist wrench (hand on arm), sensor frame")
     joint_torque = dg.State(shape=_na, doc="applied joint torques after clipping, N m")
     contact_force_total = dg.State(shape=(3,), doc="sum of the contact forces the scene exerts on the robot, world")
     sim_time = dg.State(shape=(), doc="MuJoCo time, s")

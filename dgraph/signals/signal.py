@@ -516,12 +516,14 @@ class State(Output):
         """Check and hold ``value`` as the next state (raises :class:`SpecError` here, not at commit).
 
         ``copy=False`` keeps a float array of the declared shape as it is (still checked for
-        NaN): for a caller that hands over an array of its own that it never writes again, such
-        as the result of a gather (a device's sensors), it saves a copy per state per tick.
-        ``nan_checked``: the caller found no NaN in ``value`` (:func:`stage_views`).
+        NaN and inf): for a caller that hands over an array of its own that it never writes again,
+        such as the result of a gather (a device's sensors), it saves a copy per state per tick.
+        ``nan_checked``: the caller found no NaN (nor inf) in ``value`` (:func:`stage_views`). A
+        state of ``finite=None`` (a raw reading) is staged NaN and all.
         """
         spec = self.spec
-        array = exact_float_copy(spec, value, copy, nan_checked, spec.finite)  # the common case first
+        checked = nan_checked or spec.finite is None
+        array = exact_float_copy(spec, value, copy, checked, bool(spec.finite))  # the common case first
         if array is None:
             array = _coerce(self, value, copy)
             if spec.finite and spec.dtype == "float" and _infinite(array):

@@ -40,9 +40,10 @@ class Spec:
     ``finite`` (float signals): with ``True`` (the default) NaN and infinities are refused where
     computed values are checked (``check_values``) and where states are staged; a port whose
     values may legitimately be infinite (an unbounded bound, the residual of an invalid level)
-    declares ``finite=False`` (NaN still refused); ``None`` refuses nothing: a raw reading that
-    its readers check themselves (a fault injector's output). A constant set on an input may be
-    infinite (a saturation without a bound), never NaN.
+    declares ``finite=False`` (NaN still refused); ``None`` refuses nothing, computed, staged or
+    set: a raw reading that its readers check themselves (a device's sensors, a fault
+    injector's output). A constant set on an input of a finite spec may be infinite (a
+    saturation without a bound), never NaN.
 
     ``minimum`` (numeric signals): the smallest value a set value may hold, element by element
     (a gain, a weight: ``0.0``); :meth:`coerce` refuses a value below it. It is checked where
@@ -142,7 +143,7 @@ class Spec:
             raise SpecError(f"{where}: cannot convert {_short(value)} to {self!r}: {exc}") from None
         if not self._shape_ok(array.shape):
             raise SpecError(f"{where}: value of shape {array.shape} does not match {self!r}")
-        if self.dtype == "float" and has_nan(array):
+        if self.dtype == "float" and self.finite is not None and has_nan(array):
             raise SpecError(f"{where}: value contains NaN: {_short(value)}")
         return self._at_least_minimum(array, where)
 

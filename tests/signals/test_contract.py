@@ -676,3 +676,25 @@ def test_an_input_minimum_refuses_constants_and_defaults_below_it_where_they_are
 
     with pytest.raises(dg.SpecError, match=r"b\.k: must be >= 0"):
         BadDefault("b")
+
+
+class RawReadings(dg.Entity):
+    """A driver's raw readings (``finite=None``) beside a checked state."""
+
+    has_state = True
+    reading = dg.State(shape=(3,), finite=None)
+    checked = dg.State(shape=(3,))
+    raw_input = dg.Input(shape=(2,), finite=None)
+
+
+def test_a_raw_state_is_staged_nan_and_all_and_a_checked_one_refuses_it():
+    """A device's sensor states are raw (``finite=None``): a NaN reading reaches its readers'
+    guard instead of failing the tick; its own state (``finite``, the default) still refuses it."""
+    e = RawReadings("e")
+    for value in (np.array([np.nan, 0.0, 1.0]), np.array([np.inf, 0.0, 1.0]), [np.nan, 0.0, 1.0]):
+        e.reading.set(value, 1)
+        assert np.isnan(e.reading.value[0]) or np.isinf(e.reading.value[0])
+        with pytest.raises(dg.SpecError, match="NaN|inf"):
+            e.checked.stage(value)
+    e.raw_input.set([np.nan, 1.0])
+    assert np.isnan(e.raw_input(0)[0])
