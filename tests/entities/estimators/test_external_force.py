@@ -103,3 +103,92 @@ def test_the_force_is_the_rotated_reading_minus_the_weight():
     pin.framesForwardKinematics(model, data, q)
     rotation = data.oMf[model.getFrameId("wrist_left_ft_link")].rotation
     np.testing.assert_allclose(est.force(0), rotation @ reading[:3] + [0.0, 0.0, 2.0 * 9.81], atol=1e-9)
+
+
+class Reading(dg.Entity):
+    """A raw wrench as a driver hands it over, one row per tick (NaN included: a constant may not be NaN)."""
+
+    def setup(self):
+        self.rows = np.zeros((0, 6))
+
+    @dg.output(shape=(6,), depends=("t",), finite=None)
+    def output(self, t):
+        return self.rows[t]
+
+
+def guarded_wrist(rows: np.ndarray, **params) -> tuple[dg.Graph, ExternalForce]:
+    """An ExternalForce at half-sitting, its wrench from ``rows``, value checks on."""
+    g = dg.Graph(dt=0.001, name="guarded_wrist")
+    g.check_values = True
+    model = load_model("talos")
+    robot = g.add(RobotModel("robot"))
+    robot.q.set(model.referenceConfigurations["half_sitting"])
+    robot.v.set(np.zeros(model.nv))
+    reading = g.add(Reading("sensor"))
+    reading.rows = rows
+    est = g.add(ExternalForce("wrist", frame="wrist_left_ft_link", payload_mass=2.0, **params))
+    g.plug("robot.state", "wrist.robot")
+    g.plug("sensor.output", "wrist.wrench")
+    return g, est
+
+
+def run_ticks(g: dg.Graph, est: ExternalForce, ticks: int) -> tuple[np.ndarray, np.ndarray]:
+    """The trusted wrench and the force at each tick, read as a controller would, then committed."""
+    wrenches, forces = [], []
+    for _ in range(ticks):
+        wrenches.append(est.checked_wrench(g.t).copy())
+        forces.append(est.force(g.t).copy())
+        g.step()
+    return np.array(wrenches), np.array(forces)
+
+
+def test_a_bad_wrench_element_is_replaced_by_the_last_good_one_and_reported():
+    """NaN, inf and out of range (2 kN m > torque_range 1 kN m), for two ticks: the force stays
+    finite, each bad element is the last trusted reading of it, the faults name wrist.wrench[i];
+    the tick after, the reading is trusted again as it is."""
+    rows = np.arange(1.0, 7.0) + 0.1 * np.arange(6)[:, None]  # every element moves every tick
+    rows[2:4, 2] = np.nan
+    rows[2:4, 1] = np.inf
+    rows[2:4, 4] = 2000.0
+    g, est = guarded_wrist(rows)
+    wrenches, forces = run_ticks(g, est, 6)
+    assert np.isfinite(forces).all()
+    expected = rows.copy()
+    expected[2:4, [1, 2, 4]] = rows[1, [1, 2, 4]]  # the last trusted value, at both bad ticks
+    np.testing.assert_array_equal(wrenches, expected)
+    state = g["robot"].state(g.t)
+    rotation = state.frame_placement(est.frame_index(state)).rotation
+    np.testing.assert_allclose(forces, expected[:, :3] @ rotation.T + [0.0, 0.0, 2.0 * 9.81], atol=1e-9)
+    faults = [(f.tick, f.signal, f.cause, f.action) for f in g.fault_log.faults]
+    action = "replaced by its prediction"
+    assert faults == [(t, f"wrist.wrench[{i}]", cause, action) for t in (2, 3)
+                      for i, cause in ((1, "inf"), (2, "NaN"), (4, "out of range"))]
+    assert "from sensor.output" in g.fault_log.faults[0].detail
+    assert g.fault_log.degraded_ticks == 2
+
+
+def test_the_ranges_are_parameters_and_the_check_can_be_turned_off():
+    rows = np.tile([0.0, 0.0, 600.0, 0.0, 0.0, 0.0], (3, 1)) + 0.1 * np.arange(3)[:, None]
+    rows[1, 2] = 700.0  # a real contact jump: never refused for a jump
+    rows[2, 2] = 2000.0
+    g, est = guarded_wrist(rows, force_range=1000.0)
+    wrenches, _ = run_ticks(g, est, 3)
+    assert wrenches[1, 2] == 700.0 and wrenches[2, 2] == 700.0
+    assert [(f.tick, f.signal, f.cause) for f in g.fault_log.faults] == [(2, "wrist.wrench[2]", "out of range")]
+    rows[1, 2] = np.nan
+    g, est = guarded_wrist(rows, check_sensors=False)
+    with pytest.raises(dg.SpecError, match=r"wrist\.checked_wrench at tick 1: computed a value containing NaN"):
+        run_ticks(g, est, 2)
+
+
+def test_a_frozen_wrench_is_reported_and_kept():
+    rows = np.tile(np.arange(1.0, 7.0), (8, 1)) + 0.1 * np.arange(8)[:, None]
+    rows[3:] = rows[3]  # the driver stopped at tick 3: the same bits from then on
+    g, est = guarded_wrist(rows, frozen_ticks=3)
+    wrenches, _ = run_ticks(g, est, 8)
+    np.testing.assert_array_equal(wrenches, rows)  # nothing better than the last reading
+    frozen = [(f.tick, f.signal) for f in g.fault_log.faults if f.cause == "frozen"]
+    assert frozen[0] == (6, "wrist.wrench[0]") and {s for _, s in frozen} == {f"wrist.wrench[{i}]" for i in range(4)}
+    g, est = guarded_wrist(rows, frozen_ticks=3)
+    g.run(ticks=8)  # nothing reads the force: the reading is checked at every tick all the same
+    assert [(f.tick, f.signal) for f in g.fault_log.faults if f.cause == "frozen"] == frozen
