@@ -20,9 +20,12 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from dgraph.errors import DGraphError, GraphFileError
+
+if TYPE_CHECKING:
+    from dgraph.graph import Graph
 
 EXIT_ERROR = 2
 
@@ -126,7 +129,7 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print_faults(graph: Any) -> None:
+def _print_faults(graph: Graph) -> None:
     """The degraded ticks of a run (bad data survived, see dgraph.faults), and the most frequent faults."""
     log = graph.fault_log
     if log.degraded_ticks:

@@ -47,7 +47,7 @@ class Graph:
         self.clock = Clock()
         self.t = 0
         self.duration: float | None = None
-        self.fault_log = FaultLog()
+        self._fault_log = FaultLog()
         self._entities: dict[str, Entity] = {}
         self._roles: dict[str, list[Any]] | None = None
         self._check_dependencies = False
@@ -269,6 +269,11 @@ class Graph:
         return profile(self, ticks)
 
     # -- loop -----------------------------------------------------------------------------
+    @property
+    def fault_log(self) -> FaultLog:
+        """The faults of the ticks run so far (one log per graph: ``fault_log.clear()`` forgets them)."""
+        return self._fault_log
+
     def roles(self) -> dict[str, Any]:
         """What the loop treats specially: ``devices``, ``stateful`` and ``observers`` entities,
         ``periodic`` outputs (sampled by the loop at the start of each period window) and the
@@ -281,7 +286,7 @@ class Graph:
                 "stateful": [e for e in ents if e.has_state],
                 "observers": [e for e in ents if e.observes],
                 "commit": [e for e in ents if e.has_state] + [e for e in ents if e.observes and not e.has_state],
-                "faults": self.fault_log,
+                "faults": self._fault_log,
                 "periodic": [o for o in self._computed_outputs() if o.period > 1],
             }
         return self._roles

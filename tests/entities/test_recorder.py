@@ -13,6 +13,7 @@ import dgraph as dg
 from dgraph.entities.recording import Recorder, read_series
 from dgraph.entities.recording.recorder import component_names
 from dgraph.entities.references import Sinusoid
+from dgraph.faults import Fault
 from tests.conftest import Scale, Ticker
 
 
@@ -264,3 +265,16 @@ def test_the_rrd_has_the_faults_text_log(tmp_path):
     assert logged == [(2, ["tick 2: flaky.y: NaN (nan); replaced by 0"], ["WARN"])]
     ticks, values = read_series(str(tmp_path / "faults.rrd"))["/signals/flaky/y"]
     assert ticks.tolist() == [0, 1, 2, 3, 4] and values.ravel().tolist() == [0.0, 1.0, 0.0, 3.0, 4.0]
+
+
+def test_a_recorder_keeps_at_most_kept_faults_and_counts_every_degraded_tick(tmp_path, monkeypatch):
+    """A sensor dead for minutes must not fill the memory or the viewer: past KEPT_FAULTS the
+    faults are no longer kept, the degraded ticks still are."""
+    import dgraph.entities.recording.recorder as recorder_module
+
+    monkeypatch.setattr(recorder_module, "KEPT_FAULTS", 2)
+    g = faulty_graph(tmp_path)
+    rec = g["rec"]
+    for t in range(4):  # four degraded ticks, one fault each
+        rec._keep_faults([Fault(t, "s.x", "NaN", "kept")])
+    assert [f.tick for f in rec._faults] == [0, 1] and rec._degraded == [0, 1, 2, 3]

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -18,6 +17,7 @@ from dgraph.entities.estimators.leg_odometry import (
 from dgraph.entities.estimators.sensor_guard import Channel, SensorGuard
 from dgraph.entities.robot.robot_state import load_model
 from dgraph.entities.robot.rotations import matrix_to_quat, quat_to_rows
+from dgraph.signals.spec import non_finite
 from dgraph.signals.value_types import value_type
 
 SENSOR_INPUTS = ("imu_orientation", "imu_angular_velocity", "imu_linear_acceleration", "encoder_position",
@@ -108,8 +108,9 @@ class FloatingBaseEstimator(dg.Entity):
 
     Sensor readings are checked where they enter, before (1): every input goes through a
     :class:`~dgraph.entities.estimators.sensor_guard.SensorGuard` (``check_sensors``), which
-    replaces a NaN, infinite, out-of-range, jumping or frozen element by its prediction and
-    reports a fault naming ``estimator.<input>[i]``: one bad sample costs one degraded tick,
+    replaces a NaN, infinite, out-of-range or jumping element (and a frozen joint position) by
+    its prediction and reports a fault naming ``estimator.<input>[i]`` (a frozen reading without
+    a rate is reported and kept: there is nothing better): one bad sample costs one degraded tick,
     never the loop, and the filter states stay finite. Ranges: joint limits widened by
     ``joint_limit_margin``, joint speeds up to 1.5 times the model's limit plus 1 rad/s, the gyro
     up to ``gyro_range``, the accelerometer up to ``accelerometer_range``, the F/T sensors up to
@@ -414,7 +415,7 @@ class FloatingBaseEstimator(dg.Entity):
         """
         est = self.estimate(t)
         pending = [self.prediction]
-        if math.isfinite(np.vdot(est.next_prediction, est.next_prediction)):
+        if not non_finite(est.next_prediction):
             self.prediction.stage(est.next_prediction, copy=False)  # a slice of the estimate's own array
         else:  # only with check_sensors off, or a sensor value the guard let through
             self.prediction.stage(self.prediction.value)

@@ -10,7 +10,7 @@ import numpy as np
 import dgraph as dg
 from dgraph.entities.recording.columns import Table
 from dgraph.entities.recording.rerun_stream import RerunStream, default_flush_every, open_stream_for
-from dgraph.faults import Fault
+from dgraph.faults import KEPT_FAULTS, Fault
 from dgraph.signals.signal import Signal
 
 
@@ -37,8 +37,9 @@ class Recorder(dg.Entity):
 
     The faults of the recorded ticks (:mod:`dgraph.faults`: what bad data a tick survived and
     what replaced it) are recorded too: in the ``.npz``, ``degraded`` (per recorded tick) and
-    one entry per fault in ``fault_tick``, ``fault_signal``, ``fault_cause``, ``fault_action``
-    and ``fault_detail``; in Rerun, a warning on the ``faults`` text log at the fault's tick.
+    one entry per fault (the first ``KEPT_FAULTS``) in ``fault_tick``, ``fault_signal``,
+    ``fault_cause``, ``fault_action`` and ``fault_detail``; in Rerun, a warning on the ``faults``
+    text log at the fault's tick, sent with the series (one batch per flush).
 
     Parameters: ``signals`` (``entity.signal`` names), ``rerun`` (``save``, the default: an .rrd
     file, ``rrd_path`` or ``out/<graph name>.rrd``; ``spawn``: a viewer; ``serve``: a web viewer
@@ -72,6 +73,7 @@ class Recorder(dg.Entity):
         self._faults: list[Fault] = []  # of the kept rows
         self._tick_faults: list[Fault] = []  # of this tick's row, kept with it
         self._degraded: list[int] = []  # the recorded ticks with a fault
+        self._unsent_faults: list[Fault] = []  # kept, not yet sent to Rerun
         self._stream: RerunStream | None = None
         self._plotted: list[tuple[int, str, list[str]]] | None = None
         self._pending = 0
@@ -129,17 +131,27 @@ class Recorder(dg.Entity):
             self._row_written = False
             self._rows.keep()
             if self._tick_faults:
-                self._faults += self._tick_faults
-                self._degraded.append(self._tick_faults[0].tick)
-                if self._stream is not None:
-                    self._stream.send_faults(self._tick_faults)
+                self._keep_faults(self._tick_faults)
                 self._tick_faults = []
         if self._stream is not None:
             self._pending += 1
             if self._pending >= self.flush_every:
                 self._send()
 
+    def _keep_faults(self, faults: list[Fault]) -> None:
+        """Keep a committed tick's faults: the first :data:`~dgraph.faults.KEPT_FAULTS` in full
+        (a sensor dead for minutes would fill the memory and the viewer), each tick counted in
+        ``degraded``; they go to Rerun with the next batch of series."""
+        self._degraded.append(faults[0].tick)
+        room = KEPT_FAULTS - len(self._faults)
+        if room > 0:
+            self._faults += faults[:room]
+            self._unsent_faults += faults[:room]
+
     def _send(self) -> None:
+        if self._unsent_faults:  # one batch for all the faults since the last send
+            self._stream.send_faults(self._unsent_faults)
+            self._unsent_faults = []
         n = self._pending
         self._pending = 0
         if n == 0 or self._stream is None:

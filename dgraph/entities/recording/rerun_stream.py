@@ -250,13 +250,10 @@ class RerunStream:
         self.send_batch(ticks, fields, columns)
 
     def send_faults(self, faults: list[Fault]) -> None:
-        """Log each fault as a warning on the ``faults`` text log, at its tick (faults are rare:
-        one log call each)."""
-        rr, rec = self._rr, self.rec
-        for fault in faults:
-            rec.set_time("tick", sequence=fault.tick)
-            rec.set_time("time", duration=fault.tick * self.dt)
-            rec.log("faults", rr.TextLog(str(fault), level=rr.TextLogLevel.WARN))
+        """Log the faults as warnings on the ``faults`` text log, each at its tick, in one batch."""
+        ticks = np.array([fault.tick for fault in faults], dtype=np.int64)
+        columns = self._rr.TextLog.columns(text=[str(fault) for fault in faults], level=["WARN"] * len(faults))
+        self.rec.send_columns("faults", indexes=self.indexes(ticks), columns=columns)
 
     def close(self) -> None:
         """Release this user's share; the last user flushes and closes the sink."""

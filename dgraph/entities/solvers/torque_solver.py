@@ -74,8 +74,12 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
         """Collect the task and contact inputs."""
         self._task_inputs = [getattr(self, n) for n in self.tasks]
         self._contact_inputs = [getattr(self, n) for n in self.contacts]
-        self._last_good: tuple[np.ndarray, np.ndarray] | None = None
         self._gravity_data: pin.Data | None = None
+
+    def reset(self) -> None:
+        """No finite state seen yet (the fallback's last resort is zero torque)."""
+        super().reset()
+        self._last_good: tuple[np.ndarray, np.ndarray] | None = None
 
     def check(self) -> list[str]:
         """The plugged robot model must be the size of ``model``."""
@@ -101,7 +105,8 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
         return equation
 
     def keep_state(self, state: RobotState) -> None:
-        """Remember ``(q, v)`` of a state the solve succeeded on (finite): the fallback's last resort."""
+        """Remember ``(q, v)`` of a finite state (one a solve succeeded on, or a finite state the
+        fallback used): the fallback's last resort."""
         self._last_good = (state.q.copy(), state.v.copy())
 
     def fallback_torque(self, t: int, state: RobotState, status: int) -> np.ndarray:
@@ -109,7 +114,9 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
         not finite, on the last state kept by :meth:`keep_state` (zero torque if none); the
         fault is reported."""
         q, v, used = state.q, state.v, "the state at this tick"
-        if not (np.isfinite(q).all() and np.isfinite(v).all()):
+        if np.isfinite(q).all() and np.isfinite(v).all():
+            self.keep_state(state)
+        else:
             q, v = self._last_good or (None, None)
             used = "the last finite state" if q is not None else "zero torque: no finite state yet"
         self.report_fault(t, "tau", f"solve failed: {Status(status).name}",

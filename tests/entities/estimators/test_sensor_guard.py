@@ -470,5 +470,5 @@ def test_a_position_at_rest_repeating_its_value_is_not_frozen():
     rig = Rig(frozen_ticks=2)
     rig.run(5)
     for _ in range(6):
-        values, faults = rig.tick(pos={1: GOOD["pos"][5, 1]})
+        _, faults = rig.tick(pos={1: GOOD["pos"][5, 1]})
         assert not [f for f in faults if f.cause == "frozen"]
