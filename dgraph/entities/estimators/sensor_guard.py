@@ -263,13 +263,16 @@ class SensorGuard:
     def _report(self, t: int, raw: np.ndarray, predicted: np.ndarray, bad: np.ndarray, action: str) -> None:
         """One fault per bad element (per quaternion: one for the whole reading), the first
         :data:`MAX_NAMED` named, the others counted in one more."""
-        faults, seen = [], set()
+        faults, seen, more = [], set(), 0
         for index in np.flatnonzero(bad).tolist():
             channel = self._channel_of[index]
             whole = self.channels[channel].quaternion
             if whole and channel in seen:
                 continue
             seen.add(channel)
+            if len(faults) == MAX_NAMED:  # counted, not described (a dead sensor: every tick)
+                more += 1
+                continue
             if whole:  # named by its worst element: non-finite, else the farthest from its prediction
                 part = self._slices[channel]
                 error = np.abs(raw[part] - predicted[part])
@@ -279,10 +282,10 @@ class SensorGuard:
             where = self._source(channel)
             faults.append((name if whole else f"{name}[{element}]", cause,
                            f"{where}: {detail}" if where and detail else where or detail))
-        for signal, cause, detail in faults[:MAX_NAMED]:
+        for signal, cause, detail in faults:
             self.entity.report_fault(t, signal, cause, action, detail)
-        if len(faults) > MAX_NAMED:
-            self.entity.report_fault(t, "sensors", "more bad elements", action, f"{len(faults) - MAX_NAMED} more")
+        if more:
+            self.entity.report_fault(t, "sensors", "more bad elements", action, f"{more} more")
 
     def _source(self, channel: int) -> str:
         """``from <the plugged output>`` (where the bad reading came from), or nothing."""
