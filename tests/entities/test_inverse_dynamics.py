@@ -377,3 +377,58 @@ def test_a_held_solution_passes_the_dependency_checks_time_after_time():
     first = solver.solution(0)
     for t in range(1, 4):
         assert solver.solution(t) is first and solver.tau(t) is solver.tau(0)
+
+
+class RawConfiguration(dg.Entity):
+    """A configuration as an estimator fed bad data would hand it over (NaN included: a constant may not be NaN)."""
+
+    def setup(self):
+        self.value = half_sitting()
+
+    @dg.output(shape=(39,), depends=("t",), finite=None)
+    def output(self, t):
+        return self.value
+
+
+def fallback_gravity(model, state_q, state_v, damping=1.0):
+    """``g_j(q) - d v_j``, clipped to the torque limits."""
+    gravity = pin.computeGeneralizedGravity(model, model.createData(), state_q)[6:]
+    return np.clip(gravity - damping * state_v[6:], -model.effortLimit[6:], model.effortLimit[6:])
+
+
+def test_a_non_finite_state_at_the_first_solve_gives_zero_torque():
+    """No state was ever finite, so there is none to compute gravity compensation on: zero
+    torque (finite), and the fault says so."""
+    graph = build()
+    raw = graph.add(RawConfiguration("raw"))
+    raw.value = half_sitting()
+    raw.value[10] = np.nan
+    graph.plug("raw.output", "robot.q")
+    solver = graph["solver"]
+    assert solver.status(0) == NOT_FINITE
+    assert np.array_equal(solver.tau(0), np.zeros(32))
+    [fault] = graph.fault_log.staged(0)
+    assert (fault.signal, fault.cause) == ("solver.tau", "solve failed: NOT_FINITE")
+    assert fault.action == "fallback torque g(q) - d v on zero torque: no finite state yet"
+
+
+def test_a_failed_solve_on_a_finite_state_falls_back_on_that_state():
+    """Tick 0 is solved at half-sitting; tick 1 has another, finite state and a problem ProxQP
+    finds primal infeasible: the fallback is computed on the state of tick 1, not on the last
+    solved one, and the fault says which."""
+    graph = build()
+    solver = graph["solver"]
+    assert solver.status(0) == SOLVED
+    graph.step()
+    q, v = perturbed_state(4)
+    graph["robot"].q.set(q)
+    graph["robot"].v.set(v)
+    graph["posture_task"].kp.set(1e5)  # absurd: primal infeasible (test_a_real_solver_failure_is_not_sticky)
+    graph["posture"].reference.set(half_sitting()[7:] + 0.5)
+    assert solver.status(1) == PRIMAL_INFEASIBLE
+    model = graph["robot"].pin_model
+    np.testing.assert_allclose(solver.tau(1), fallback_gravity(model, q, v, solver.fallback_damping), rtol=0.0,
+                               atol=1e-9)
+    assert np.abs(solver.tau(1) - fallback_gravity(model, half_sitting(), np.zeros(38))).max() > 0.1  # not tick 0's
+    [fault] = graph.fault_log.staged(1)
+    assert fault.action == "fallback torque g(q) - d v on the state at this tick"
