@@ -60,6 +60,20 @@ class Ticker(dg.Device):
         self.x.commit(t_next)
 
 
+class Follower(dg.Entity):
+    """A stateful entity that pulls its input every tick: s(t + 1) = u(t)."""
+
+    has_state = True
+    u = dg.Input(shape=())
+    s = dg.State(shape=(), initial=0.0)
+
+    def prepare_state(self, t):
+        self.s.stage(self.u(t))
+
+    def commit_state(self, t_next):
+        self.s.commit(t_next)
+
+
 class Clocked(dg.Entity):
     """Time-varying output: value = t (reads nothing)."""
 

@@ -7,7 +7,7 @@ import pytest
 import dgraph as dg
 from dgraph import faults
 from dgraph.faults import Fault, FaultLog
-from tests.conftest import Ticker
+from tests.conftest import Follower, Ticker
 
 
 def test_a_reported_fault_is_staged_until_its_tick_commits():
@@ -83,8 +83,16 @@ def test_only_the_first_kept_faults_are_stored_but_every_one_is_counted(monkeypa
     assert sum(log.counts.values()) == 8
 
 
-def test_the_default_cap_is_ten_thousand():
-    assert faults.KEPT_FAULTS == 10_000
+def test_a_sensor_dead_for_a_minute_at_1_khz_leaves_a_bounded_log_that_counts_every_fault():
+    """With the default cap (not patched): 60,000 faults keep at most KEPT_FAULTS, the first ones,
+    and the counts, the degraded ticks and the summary still see all of them."""
+    log = FaultLog()
+    for t in range(60_000):
+        log.report(t, "est.encoder_position[3]", "NaN", "replaced by its prediction")
+        log.commit(t)
+    assert len(log.faults) == faults.KEPT_FAULTS < 60_000
+    assert log.faults[-1].tick == faults.KEPT_FAULTS - 1
+    assert log.degraded_ticks == 60_000 and log.summary() == "60000 x est.encoder_position[3]: NaN"
 
 
 def test_summary_lists_the_most_frequent_kinds_first_and_counts_the_rest():
@@ -136,20 +144,6 @@ class Clamp(dg.Entity):
             self.report_fault(t, "y", "too large", "clamped to 2", f"{u:g}")
             return 2.0
         return u
-
-
-class Follower(dg.Entity):
-    """A stateful entity that pulls its input every tick (s(t + 1) = u(t))."""
-
-    has_state = True
-    u = dg.Input(shape=())
-    s = dg.State(shape=(), initial=0.0)
-
-    def prepare_state(self, t):
-        self.s.stage(self.u(t))
-
-    def commit_state(self, t_next):
-        self.s.commit(t_next)
 
 
 class Bomb(dg.Entity):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import dgraph as dg
-from tests.conftest import Scale, Ticker
+from tests.conftest import Follower, Scale, Ticker
 
 
 def test_tick_order_before_control_commit_after(graph):
@@ -72,17 +72,10 @@ def test_failing_signal_hook_names_its_entity(graph):
 def test_failure_while_pulling_control_commits_nothing(graph):
     graph.add(Ticker("first"))
 
-    class Follower(dg.Device):
-        u = dg.Input(shape=())
-        s = dg.State(shape=(), initial=0.0)
+    class FollowerDevice(Follower, dg.Device):
+        """A device that pulls its unplugged input when it integrates."""
 
-        def prepare_state(self, t):
-            self.s.stage(self.u(t))
-
-        def commit_state(self, t_next):
-            self.s.commit(t_next)
-
-    graph.add(Follower("second"))
+    graph.add(FollowerDevice("second"))
     with pytest.raises(dg.UnpluggedInputError, match=r"second\.u"):
         graph.step()
     assert graph["first.x"].time == 0 and graph.t == 0
