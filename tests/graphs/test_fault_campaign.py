@@ -57,33 +57,46 @@ def standing_with_faults(sensor: str) -> tuple[dg.Graph, list[tuple[str, int, in
     return graph, plan
 
 
-def run_campaign(sensor: str, check_values: bool) -> tuple[dg.Graph, list[tuple[str, int, int]], dict]:
-    graph, plan = standing_with_faults(sensor)
+def run_watched(graph: dg.Graph, duration: float, check_values: bool) -> dict:
+    """Run ``graph`` for ``duration`` s, watching after each step what MuJoCo was given
+    (``ctrl_finite``), whether the device had to replace a torque (``control_fault``) and the
+    base height (``heights``)."""
     graph.check_values = check_values
     device = graph["device"]
     seen = {"ctrl_finite": True, "heights": [], "control_fault": 0}
 
-    def watch(t: int) -> None:  # after each step: what MuJoCo was given, and where the robot is
+    def watch(t: int) -> None:
         seen["ctrl_finite"] &= bool(np.isfinite(device.data.ctrl).all())
         seen["heights"].append(float(device.q.value[2]))
         seen["control_fault"] = max(seen["control_fault"], int(device.control_fault.value))
 
     device.after.add(watch)
     with graph:
-        graph.run(duration=START + SPACING * len(FAULTS), progress=False)
-    return graph, plan, seen
+        graph.run(duration=duration, progress=False)
+    return seen
+
+
+def run_campaign(sensor: str, check_values: bool) -> tuple[dg.Graph, list[tuple[str, int, int]], dict]:
+    graph, plan = standing_with_faults(sensor)
+    return graph, plan, run_watched(graph, START + SPACING * len(FAULTS), check_values)
+
+
+def assert_safe_and_standing(graph: dg.Graph, seen: dict, duration: float, bound: float = 0.02) -> None:
+    """The loop ran to the end, MuJoCo never got a non-finite torque (none was even replaced),
+    TALOS did not fall and its base height stayed within ``bound`` of where it started."""
+    assert graph.t == round(duration / graph.dt)  # the loop never stopped
+    assert seen["ctrl_finite"] and seen["control_fault"] == 0
+    heights = np.array(seen["heights"])
+    assert not graph["device"].fallen.value and np.abs(heights - heights[0]).max() < bound, \
+        f"base height moved by {np.abs(heights - heights[0]).max():.3f} m"
 
 
 @pytest.mark.parametrize("check_values", [False, True], ids=["checks-off", "checks-on"])
 @pytest.mark.parametrize("sensor", list(SENSORS))
 def test_standing_talos_survives_every_fault_of_every_sensor(sensor, check_values):
     graph, plan, seen = run_campaign(sensor, check_values)
-    assert graph.t == round((START + SPACING * len(FAULTS)) / graph.dt)  # the loop never stopped
-    assert seen["ctrl_finite"] and seen["control_fault"] == 0  # no non-finite torque, none even replaced
-    heights = np.array(seen["heights"])
-    bound = 0.06 if sensor == "imu_linear_acceleration" else 0.02
-    assert not graph["device"].fallen.value and np.abs(heights - heights[0]).max() < bound, \
-        f"base height moved by {np.abs(heights - heights[0]).max():.3f} m"
+    assert_safe_and_standing(graph, seen, START + SPACING * len(FAULTS),
+                             0.06 if sensor == "imu_linear_acceleration" else 0.02)
     name = f"estimator.{sensor}"
     faults = [f for f in graph.fault_log.faults if f.signal.startswith(name)]
     for kind, ticks, first in plan:
@@ -100,6 +113,46 @@ def test_standing_talos_survives_every_fault_of_every_sensor(sensor, check_value
                 assert frozen and frozen[0].tick <= first + 50, f"frozen from tick {first}: {frozen[:1]}"
         late = [f for f in faults if first + ticks + 5 <= f.tick < first + round(SPACING / graph.dt)]
         assert not late, f"{kind} over [{first}, {first + ticks}): still replaced after: {late[0]}"
+
+
+
+PUSH_FAULTS = (("nan", 2.0), ("inf", 2.1))  # s: the tool presses on the block from about 1.75 s
+PUSH_DURATION = 2.3
+
+
+@pytest.mark.parametrize("check_values", [False, True], ids=["checks-off", "checks-on"])
+def test_a_bad_wrist_wrench_in_contact_costs_the_push_one_degraded_tick(check_values):
+    """The push-tank graph with the tool on the block: the left wrist wrench (read by wrist_force,
+    an ExternalForce, not the estimator) all NaN for one tick, then all inf for one tick. Before
+    wrist_force guarded it, the force task's integral (checks off) or wrist_force.force (checks on)
+    went NaN and every retry failed. Now each costs one degraded tick naming wrist_force.wrench,
+    the force of that tick is the last trusted one, the contact is kept and TALOS stays up."""
+    graph = dg.load(str(ROOT / "graphs" / "talos_push_tank.yaml"), {"recorder.rerun": "off", "view.rerun": "off"})
+    source = graph["wrist_force.wrench"].source
+    graph.unplug("wrist_force.wrench")
+    ticks = []
+    for i, (kind, start) in enumerate(PUSH_FAULTS):
+        fault = graph.add(SensorFault(f"fault{i}", kind=kind, start=start, ticks=1))
+        graph.plug(source, fault.reading)
+        source = fault.output
+        ticks.append(round(start / graph.dt))
+    graph.plug(source, "wrist_force.wrench")
+    wrist, detector = graph["wrist_force"], graph["detector"]
+    trusted, phases = {}, {}
+    keep = {t + d for t in ticks for d in (-1, 0)}
+    graph["device"].before.add(
+        lambda t: trusted.update({t: wrist.checked_wrench(t).copy()}) if t in keep else None)
+    graph["device"].after.add(lambda t: phases.update({t: int(detector.phase.value)}))
+    seen = run_watched(graph, PUSH_DURATION, check_values)
+    assert_safe_and_standing(graph, seen, PUSH_DURATION)
+    assert all(phases[t] == 1 for t in range(ticks[0] - 200, graph.t + 1))  # in contact throughout
+    faults = graph.fault_log.faults
+    assert {f.tick for f in faults} == set(ticks) and graph.fault_log.degraded_ticks == len(ticks)
+    for (kind, _), tick in zip(PUSH_FAULTS, ticks, strict=True):
+        at = [f for f in faults if f.tick == tick]
+        assert at[0].signal == "wrist_force.wrench[0]" and at[0].cause == {"nan": "NaN", "inf": "inf"}[kind], at[0]
+        assert all(f.signal.startswith("wrist_force.") for f in at)
+        np.testing.assert_array_equal(trusted[tick], trusted[tick - 1])  # held at its last trusted value
 
 
 def test_without_the_guard_a_nan_encoder_costs_one_fallback_tick():
