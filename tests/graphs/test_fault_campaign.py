@@ -22,6 +22,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import dgraph as dg
@@ -116,6 +117,29 @@ def test_standing_talos_survives_every_fault_of_every_sensor(sensor, check_value
 
 
 
+WHOLE_START, WHOLE_TICKS, WHOLE_DURATION = 0.3, 100, 0.8
+
+
+@pytest.mark.parametrize("sensor", ["encoder_position", "imu_orientation"])
+def test_a_whole_sensor_vector_nan_for_100_ticks_does_not_make_talos_fall(sensor):
+    """Every element of the reading NaN for 100 ticks (``indices`` empty), value checks on: the
+    guard holds its prediction the whole window (the encoders move on with their velocities, the
+    orientation is held), every tick of the window names the sensor, and 5 ticks after it the
+    reading is trusted again."""
+    graph = dg.load(str(ROOT / "graphs" / "talos_standing.yaml"), {"recorder.rerun": "off", "view.rerun": "off"})
+    fault = graph.add(SensorFault("fault", kind="nan", start=WHOLE_START, ticks=WHOLE_TICKS))
+    graph.plug(graph[f"estimator.{sensor}"].source, fault.reading)
+    graph.plug(fault.output, f"estimator.{sensor}")
+    seen = run_watched(graph, WHOLE_DURATION, check_values=True)
+    assert_safe_and_standing(graph, seen, WHOLE_DURATION)
+    first = round(WHOLE_START / graph.dt)
+    name = f"estimator.{sensor}"
+    named = {f.tick for f in graph.fault_log.faults if f.signal.startswith(name) and f.cause == "NaN"}
+    assert named == set(range(first, first + WHOLE_TICKS))
+    late = [f for f in graph.fault_log.faults if f.tick >= first + WHOLE_TICKS + 5 or f.tick < first]
+    assert not late, late[0]
+
+
 PUSH_FAULTS = (("nan", 2.0), ("inf", 2.1))  # s: the tool presses on the block from about 1.75 s
 PUSH_DURATION = 2.3
 
@@ -163,14 +187,29 @@ def test_without_the_guard_a_nan_encoder_costs_one_fallback_tick():
     fault = graph.add(SensorFault("fault", kind="nan", start=0.3, ticks=1, indices=[3]))
     graph.plug(graph["estimator.encoder_position"].source, fault.reading)
     graph.plug(fault.output, "estimator.encoder_position")
-    torques = {}
+    torques, states = {}, {}
     keep = {299, 300, 301}
-    graph["device"].before.add(lambda t: torques.update({t: graph["solver"].tau(t).copy()}) if t in keep else None)
+
+    def capture(t: int) -> None:
+        if t == 299:  # the last state the QP is solved on
+            state = graph["robot"].state(t)
+            states[t] = (state.model, state.q.copy(), state.v.copy())
+        if t in keep:
+            torques[t] = graph["solver"].tau(t).copy()
+
+    graph["device"].before.add(capture)
     with graph:
         graph.run(duration=1.0, progress=False)
     assert all(np.isfinite(tau).all() for tau in torques.values()) and len(torques) == 3
-    causes = {(f.tick, f.signal, f.cause) for f in graph.fault_log.faults}
-    assert (300, "solver.tau", "solve failed: NOT_FINITE") in causes
+    [fault] = [f for f in graph.fault_log.faults if f.signal == "solver.tau"]
+    assert (fault.tick, fault.cause) == (300, "solve failed: NOT_FINITE")
+    assert fault.action == "fallback torque g(q) - d v on the last finite state"
+    model, q, v = states[299]
+    limit = model.effortLimit[6:]
+    gravity = pin.computeGeneralizedGravity(model, model.createData(), q)[6:]
+    expected = np.clip(gravity - graph["solver"].fallback_damping * v[6:], -limit, limit)
+    np.testing.assert_allclose(torques[300], expected, rtol=0.0, atol=1e-9)
+    assert np.abs(expected).max() > 5.0  # gravity compensation (N m), which zero torque would not match
     assert graph.fault_log.degraded_ticks == 1 and not graph["device"].fallen.value
     assert np.abs(torques[301] - torques[299]).max() < 5.0  # back to the QP's torque, not the fallback
 
