@@ -34,8 +34,8 @@ class ExternalForce(FrameReader, dg.Entity):
     The reading is checked where it enters (``check_sensors``): a
     :class:`~dgraph.entities.estimators.sensor_guard.SensorGuard` refuses an element that is NaN,
     infinite or outside ``±force_range`` (force) / ``±torque_range`` (torque), replaces it by the
-    last trusted value of that element (at the first tick, with none yet: 0 for NaN, the nearest
-    end of the range for an infinite or out-of-range element), and reports a fault naming
+    last trusted value of that element (at the first tick, with none yet: 0 for NaN or an
+    infinity, the nearest end of the range for a finite value beyond it), and reports a fault naming
     ``<entity>.wrench[i]``: one bad sample costs one degraded tick, and what reads the force (a
     force task's integral, a contact detector) never sees a non-finite value. An element
     bit-for-bit the same for ``frozen_ticks`` ticks in a row (not 0) is reported frozen and kept

@@ -238,16 +238,16 @@ class SensorGuard:
     def _repair(self, t: int, raw: np.ndarray, predicted: np.ndarray, bad: np.ndarray,
                 frozen: np.ndarray | None) -> np.ndarray:
         """``raw`` with its bad elements (and its frozen positions) replaced by their prediction;
-        the faults reported. A bad element with no prediction yet (the first tick) takes the
-        nearest end of its range, or 0 (a quaternion: the identity)."""
+        the faults reported. A bad element with no prediction yet (the first tick) takes 0, or
+        the nearest end of its range if 0 is outside it or the value is finite beyond it (a
+        quaternion: the identity)."""
         trusted = raw.copy()
         if frozen is not None:
             held = frozen & self._has_position
             trusted[held] = predicted[held]
-        if self._trusted is None:  # NaN: 0, then clipped; an infinity: the range's end, or 0 if it has none
-            value = np.nan_to_num(raw[bad], nan=0.0, posinf=np.inf, neginf=-np.inf)
-            fill = np.clip(value, self._lower[bad], self._upper[bad])
-            trusted[bad] = np.nan_to_num(fill, posinf=0.0, neginf=0.0)
+        if self._trusted is None:  # a finite value out of range: its nearest end; NaN or inf: 0, into the range
+            value = np.where(np.isfinite(raw[bad]), raw[bad], 0.0)
+            trusted[bad] = np.clip(value, self._lower[bad], self._upper[bad])
             for part in self._quaternions:  # clipped elements are no rotation: the identity
                 if bad[part].any():
                     trusted[part] = (0.0, 0.0, 0.0, 1.0)
@@ -261,31 +261,43 @@ class SensorGuard:
         return trusted
 
     def _report(self, t: int, raw: np.ndarray, predicted: np.ndarray, bad: np.ndarray, action: str) -> None:
-        """One fault per bad element (per quaternion: one for the whole reading), the first
-        :data:`MAX_NAMED` named, the others counted in one more."""
-        faults, seen, more = [], set(), 0
-        for index in np.flatnonzero(bad).tolist():
-            channel = self._channel_of[index]
-            whole = self.channels[channel].quaternion
-            if whole and channel in seen:
-                continue
-            seen.add(channel)
-            if len(faults) == MAX_NAMED:  # counted, not described (a dead sensor: every tick)
-                more += 1
-                continue
-            if whole:  # named by its worst element: non-finite, else the farthest from its prediction
+        """One fault per bad element (per quaternion: one for the whole reading, named by its worst
+        element: non-finite, else the farthest from its prediction)."""
+        faults = []
+        elements = self._per_reading(bad)
+        for index, channel, whole in elements[:MAX_NAMED]:  # the rest counted (a dead sensor: every tick)
+            if whole:
                 part = self._slices[channel]
                 error = np.abs(raw[part] - predicted[part])
                 index = part.start + int(np.argmax(np.where(np.isfinite(error), error, np.inf)))
-            name, element = self._element_names[index]
             cause, detail = self._cause(index, raw[index], predicted)
             where = self._source(channel)
-            faults.append((name if whole else f"{name}[{element}]", cause,
+            faults.append((self._element_name(index, whole), cause, action,
                            f"{where}: {detail}" if where and detail else where or detail))
-        for signal, cause, detail in faults:
-            self.entity.report_fault(t, signal, cause, action, detail)
-        if more:
-            self.entity.report_fault(t, "sensors", "more bad elements", action, f"{more} more")
+        self._emit(t, faults, len(elements), "more bad elements", action)
+
+    def _per_reading(self, mask: np.ndarray) -> list[tuple[int, int, bool]]:
+        """``(index, channel, whole)`` of each element of ``mask``; a quaternion's once (whole)."""
+        elements, seen = [], set()
+        for index in np.flatnonzero(mask).tolist():
+            channel = self._channel_of[index]
+            whole = self.channels[channel].quaternion
+            if not (whole and channel in seen):
+                seen.add(channel)
+                elements.append((index, channel, whole))
+        return elements
+
+    def _element_name(self, index: int, whole: bool) -> str:
+        name, element = self._element_names[index]
+        return name if whole else f"{name}[{element}]"
+
+    def _emit(self, t: int, faults: list[tuple[str, str, str, str]], total: int, more: str, action: str) -> None:
+        """Report ``faults`` (signal, cause, action, detail), and one fault counting the
+        ``total - len(faults)`` left undescribed (past :data:`MAX_NAMED`)."""
+        for signal, cause, fault_action, detail in faults:
+            self.entity.report_fault(t, signal, cause, fault_action, detail)
+        if total > len(faults):
+            self.entity.report_fault(t, "sensors", more, action, f"{total - len(faults)} more")
 
     def _source(self, channel: int) -> str:
         """``from <the plugged output>`` (where the bad reading came from), or nothing."""
@@ -306,24 +318,12 @@ class SensorGuard:
         return "jump", f"{value:.6g}, predicted {predicted[index]:.6g} (tolerance {self._tolerance[index]:.3g})"
 
     def _report_frozen(self, t: int, frozen: np.ndarray) -> None:
-        """One fault per frozen element (per quaternion: one), the first :data:`MAX_NAMED`
-        named, the others counted in one more."""
-        faults, seen = [], set()
-        for index in np.flatnonzero(frozen).tolist():
-            channel = self._channel_of[index]
-            whole = self.channels[channel].quaternion
-            if whole and channel in seen:
-                continue
-            seen.add(channel)
-            name, element = self._element_names[index]
-            action = "replaced by its prediction" if self._has_position[index] else "kept (nothing better)"
-            faults.append((name if whole else f"{name}[{element}]", action,
-                           f"the same for {self._same[index] + 1} ticks"))
-        for signal, action, detail in faults[:MAX_NAMED]:
-            self.entity.report_fault(t, signal, "frozen", action, detail)
-        if len(faults) > MAX_NAMED:
-            self.entity.report_fault(t, "sensors", "more frozen elements", "as above",
-                                     f"{len(faults) - MAX_NAMED} more")
+        """One fault per frozen element (per quaternion: one)."""
+        elements = self._per_reading(frozen)
+        faults = [(self._element_name(index, whole), "frozen",
+                   "replaced by its prediction" if self._has_position[index] else "kept (nothing better)",
+                   f"the same for {self._same[index] + 1} ticks") for index, _, whole in elements[:MAX_NAMED]]
+        self._emit(t, faults, len(elements), "more frozen elements", "as above")
 
     def _split(self, values: np.ndarray) -> list[np.ndarray]:
         """One read-only view of ``values`` per channel, in its input's shape."""

@@ -347,7 +347,7 @@ def test_a_bad_first_reading_takes_a_value_in_range():
     values, faults = rig.tick(vel={0: math.nan}, wrench={1: 500.0}, pos={2: -math.inf})
     assert values["vel"][0] == 0.0             # NaN: 0, within [-5, 5]
     assert values["wrench"][1] == 100.0        # the nearest end of its range
-    assert values["pos"][2] == -1.0
+    assert values["pos"][2] == 0.0              # an infinity: 0, within [-1, 1] (not a made-up extreme)
     expected = {("s.vel[0]", "NaN"), ("s.wrench[1]", "out of range"), ("s.pos[2]", "inf")}
     assert {(f.signal, f.cause) for f in faults} == expected and {f.action for f in faults} == {FILLED}
     values["vel"][0], values["wrench"][1], values["pos"][2] = GOOD["vel"][0, 0], GOOD["wrench"][0, 1], GOOD["pos"][0, 2]
