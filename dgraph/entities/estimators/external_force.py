@@ -39,11 +39,12 @@ class ExternalForce(FrameReader, dg.Entity):
     ``<entity>.wrench[i]``: one bad sample costs one degraded tick, and what reads the force (a
     force task's integral, a contact detector) never sees a non-finite value. An element
     bit-for-bit the same for ``frozen_ticks`` ticks in a row (not 0) is reported frozen and kept
-    (there is nothing better). There is no jump test: a contact that is made or lost is a real
+    (there is nothing better), as is a reading whose source state has not been updated for
+    ``stale_ticks`` ticks (stale). There is no jump test: a contact that is made or lost is a real
     jump of the reading. The reading is checked at every tick, whether the force is read or not.
 
     Parameters: ``frame`` (the sensor frame, e.g. ``wrist_left_ft_link``), ``payload_mass`` (kg),
-    ``check_sensors``, ``force_range`` (N), ``torque_range`` (N m), ``frozen_ticks``.
+    ``check_sensors``, ``force_range`` (N), ``torque_range`` (N m), ``frozen_ticks``, ``stale_ticks``.
     Inputs: ``robot`` (RobotModel state), ``wrench`` (6, the sensor reading: force then torque,
     raw: it may hold NaN).
     Outputs: ``checked_wrench`` (6, the reading as trusted), ``force`` (3, N, world, from the
@@ -61,6 +62,8 @@ class ExternalForce(FrameReader, dg.Entity):
     torque_range = dg.Param(1000.0, kind="float", minimum=0.0, doc="F/T torque range (N m)")
     frozen_ticks = dg.Param(50, kind="int", minimum=0, doc="identical readings in a row that make the sensor "
                                                              "frozen (0: no test)")
+    stale_ticks = dg.Param(20, kind="int", minimum=0, doc="ticks without an update of the sensor's source state "
+                                                           "that make it stale (0: no test)")
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
     wrench = dg.Input(shape=(6,), doc="sensor reading [force, torque], sensor frame")
 
@@ -76,7 +79,7 @@ class ExternalForce(FrameReader, dg.Entity):
         limit = np.array([self.force_range] * 3 + [self.torque_range] * 3)
         # no rate: dt is never used by the prediction (an entity outside a graph has none)
         dt = self.graph.dt if self.graph is not None else 0.0
-        return SensorGuard(self, [Channel("wrench", -limit, limit)], dt, self.frozen_ticks)
+        return SensorGuard(self, [Channel("wrench", -limit, limit)], dt, self.frozen_ticks, self.stale_ticks)
 
     @dg.output(shape=(6,), depends=("wrench",), labels=("fx", "fy", "fz", "tx", "ty", "tz"))
     def checked_wrench(self, t: int) -> Any:

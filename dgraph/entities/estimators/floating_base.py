@@ -120,10 +120,11 @@ class FloatingBaseEstimator(dg.Entity):
     to 365 N per tick in the push scenario) and the accelerometer (an impact is a real spike of
     hundreds of m/s2, and the filter needs it to stop the fall velocity; a persistent offset
     within range is therefore integrated into the base velocity, as without the guard: there is
-    no bias estimate); frozen after ``frozen_ticks``
-    identical readings. Should a filter state still come out non-finite, the previous one is
-    kept (and reported). The defaults are well above the largest change per tick in the
-    shipped scenarios (encoder velocity 0.13 rad/s, gyro 0.005 rad/s).
+    no bias estimate); frozen after ``frozen_ticks`` identical readings, stale when a device
+    state read has not been updated for ``stale_ticks`` ticks. Should a filter state still come
+    out non-finite, the previous one is kept (and reported). The defaults are well above the
+    largest change per tick in the shipped scenarios (encoder velocity 0.13 rad/s, gyro 0.005
+    rad/s).
 
     Parameters: ``model``, ``foot_frames``, ``ft_frames``, ``imu_frame``, ``contact_force_on``,
     ``contact_force_off``, ``cutoff_frequency``, ``q0``, ``dt``, and the sensor checks above.
@@ -156,6 +157,8 @@ class FloatingBaseEstimator(dg.Entity):
     check_sensors = dg.Param(True, kind="bool", doc="check every sensor reading and replace a bad one (SensorGuard)")
     frozen_ticks = dg.Param(50, kind="int", minimum=0, doc="identical readings in a row that make a sensor "
                                                              "frozen (0: no test)")
+    stale_ticks = dg.Param(20, kind="int", minimum=0, doc="ticks without an update of a sensor's source state "
+                                                           "that make it stale (0: no test)")
     joint_limit_margin = dg.Param(0.1, kind="float", minimum=0.0, doc="rad beyond a joint limit still trusted")
     encoder_step = dg.Param(0.01, kind="float", minimum=0.0,
                             doc="largest change (rad) per tick of an encoder from its predicted position")
@@ -241,7 +244,7 @@ class FloatingBaseEstimator(dg.Entity):
         if guard is None:
             if not self.check_sensors:
                 return [inp(t) for inp in self._sensor_inputs]
-            guard = self._guard = SensorGuard(self, self._channels(), self.dt, self.frozen_ticks)
+            guard = self._guard = SensorGuard(self, self._channels(), self.dt, self.frozen_ticks, self.stale_ticks)
         return guard.read(t)
 
     def reset(self) -> None:

@@ -18,6 +18,10 @@ and hands over a value the estimator can trust:
   sensor whose driver stopped; a real reading always carries noise, a simulated one always
   moves a little); an exact 0 is not taken for frozen (a joint at rest in a noiseless
   simulation, an unloaded axis);
+- **stale**: its source (a device's state) last updated more than ``stale_ticks`` ticks ago, as
+  seen every ``stale_ticks / 4`` ticks (a
+  driver that stopped delivering a sensor; a slower sensor under a faster loop is stale for a
+  tick or two, so the bound is a parameter): handled like a frozen reading, one fault per input;
 - a **quaternion** (``Channel.quaternion``) is refused as a whole (one bad element makes it no
   rotation), also when its norm is not 1 within 1 %, and is compared with its prediction up to
   its sign (``q`` and ``-q`` are the same rotation: a reading that flips sign is turned back,
@@ -77,11 +81,15 @@ class SensorGuard:
     ``channels``) and sets ``faulty`` (how many elements it replaced or found frozen);
     ``commit()`` makes them the prediction base of the next tick (call it from the entity's
     ``commit_state``, so a failed tick changes nothing). ``frozen_ticks`` 0 turns the frozen
-    test off.
+    test off, ``stale_ticks`` 0 (the default) the stale one.
     """
 
-    def __init__(self, entity: dg.Entity, channels: Sequence[Channel], dt: float, frozen_ticks: int = 50):
+    def __init__(self, entity: dg.Entity, channels: Sequence[Channel], dt: float, frozen_ticks: int = 50,
+                 stale_ticks: int = 0):
         self.entity = entity
+        self.stale_ticks = int(stale_ticks)
+        self._stale_every = max(1, self.stale_ticks // 4)  # looked at every so often: stale means for long
+        self._was_stale = False
         self.channels = list(channels)
         self._inputs = [entity.signal(c.name) for c in self.channels]
         sizes = [int(np.prod(inp.spec.shape)) for inp in self._inputs]
@@ -154,8 +162,11 @@ class SensorGuard:
         raw = np.concatenate([inp(t) for inp in self._inputs], axis=None)
         unit = self._orient_quaternions(raw) if self._quaternions else True
         raw.flags.writeable = False  # handed out, and kept as the next prediction's base
-        if self._trusted is None or not unit or self._replaced is not self._zero_replaced or not self._fine(raw):
-            return self._checked(t, raw)
+        stale = self._stale(t) if self.stale_ticks and (t % self._stale_every == 0 or self._was_stale) else None
+        self._was_stale = bool(stale)
+        if (self._trusted is None or not unit or self._replaced is not self._zero_replaced or stale
+                or not self._fine(raw)):
+            return self._checked(t, raw, stale)
         self._next = (raw, raw, self._zero_replaced, self._zero_same, None)
         self.faulty = 0
         return self._split(raw)
@@ -180,8 +191,20 @@ class SensorGuard:
             return True
         return not (within & self._frozen_test & (raw != 0.0)).any()  # a repeated 0 cannot be frozen
 
-    def _checked(self, t: int, raw: np.ndarray) -> list[np.ndarray]:
-        """Element by element: which are bad or frozen, the repaired reading, the faults."""
+    def _stale(self, t: int) -> list[tuple[int, int]]:
+        """``(channel, tick of its source's last update)`` of each input whose source last
+        changed more than ``stale_ticks`` ticks before ``t`` (looked at every ``stale_ticks / 4``
+        ticks, and every tick while one is stale: found within 1.25 ``stale_ticks``)."""
+        stale = []
+        for channel, inp in enumerate(self._inputs):
+            source = inp._source
+            updated = source.time if source is not None else None
+            if updated is not None and t - updated > self.stale_ticks:
+                stale.append((channel, updated))
+        return stale
+
+    def _checked(self, t: int, raw: np.ndarray, stale: list[tuple[int, int]] | None = None) -> list[np.ndarray]:
+        """Element by element: which are bad, frozen or stale, the repaired reading, the faults."""
         first = self._trusted is None
         predicted = raw if first else self._predicted
         in_range = (raw >= self._lower) & (raw <= self._upper) & np.isfinite(raw)  # NaN compares false
@@ -196,8 +219,14 @@ class SensorGuard:
         if self.frozen_ticks and self._raw is not None:
             same = (same + 1) * (raw == self._raw)
         frozen = self._frozen(same, raw, bad) if self.frozen_ticks else None
-        self.faulty = int(bad.sum()) + (0 if frozen is None else int(frozen.sum()))
-        trusted = raw if not self.faulty else self._repair(t, raw, predicted, bad, frozen)
+        held = frozen  # a frozen or stale position follows its prediction, another reading is kept
+        if stale:
+            held = np.zeros(len(raw), dtype=bool) if frozen is None else frozen.copy()
+            for channel, _ in stale:
+                held[self._slices[channel]] |= ~bad[self._slices[channel]]
+            self._report_stale(t, stale)
+        self.faulty = int(bad.sum()) + (0 if held is None else int(held.sum()))
+        trusted = raw if not self.faulty else self._repair(t, raw, predicted, bad, frozen, held)
         replaced = np.where(bad, self._replaced + 1, 0) if bad.any() else self._zero_replaced
         if not same.any():
             same = self._zero_same
@@ -236,15 +265,15 @@ class SensorGuard:
         return not self._not_unit
 
     def _repair(self, t: int, raw: np.ndarray, predicted: np.ndarray, bad: np.ndarray,
-                frozen: np.ndarray | None) -> np.ndarray:
-        """``raw`` with its bad elements (and its frozen positions) replaced by their prediction;
-        the faults reported. A bad element with no prediction yet (the first tick) takes 0, or
-        the nearest end of its range if 0 is outside it or the value is finite beyond it (a
-        quaternion: the identity)."""
+                frozen: np.ndarray | None, held: np.ndarray | None) -> np.ndarray:
+        """``raw`` with its bad elements (and its ``held`` positions: frozen or stale) replaced by
+        their prediction; the bad and frozen elements reported. A bad element with no prediction
+        yet (the first tick) takes 0, or the nearest end of its range if 0 is outside it or the
+        value is finite beyond it (a quaternion: the identity)."""
         trusted = raw.copy()
-        if frozen is not None:
-            held = frozen & self._has_position
-            trusted[held] = predicted[held]
+        if held is not None:
+            positions = held & self._has_position
+            trusted[positions] = predicted[positions]
         if self._trusted is None:  # a finite value out of range: its nearest end; NaN or inf: 0, into the range
             value = np.where(np.isfinite(raw[bad]), raw[bad], 0.0)
             trusted[bad] = np.clip(value, self._lower[bad], self._upper[bad])
@@ -316,6 +345,14 @@ class SensorGuard:
         if not lower <= value <= upper:
             return "out of range", f"{value:.6g} not in [{lower:.6g}, {upper:.6g}]"
         return "jump", f"{value:.6g}, predicted {predicted[index]:.6g} (tolerance {self._tolerance[index]:.3g})"
+
+    def _report_stale(self, t: int, stale: list[tuple[int, int]]) -> None:
+        """One fault per stale input."""
+        for channel, updated in stale:
+            moving = self.channels[channel].rate is not None
+            action = "replaced by its prediction" if moving else "kept (nothing better)"
+            self.entity.report_fault(t, self.channels[channel].name, "stale", action,
+                                     f"{self._source(channel)}: last updated at tick {updated}")
 
     def _report_frozen(self, t: int, frozen: np.ndarray) -> None:
         """One fault per frozen element (per quaternion: one)."""

@@ -472,3 +472,34 @@ def test_a_position_at_rest_repeating_its_value_is_not_frozen():
     for _ in range(6):
         _, faults = rig.tick(pos={1: GOOD["pos"][5, 1]})
         assert not [f for f in faults if f.cause == "frozen"]
+
+
+class Driver(dg.Entity):
+    """A driver's state, updated (committed) only when a sample arrives."""
+
+    has_state = True
+    sample = dg.State(shape=(2,), finite=None)
+
+
+class Reader(dg.Entity):
+    speed = dg.Input(shape=(2,), finite=None)
+
+
+def test_a_reading_whose_source_stops_updating_is_stale_after_stale_ticks():
+    graph = dg.Graph(dt=DT, name="stale")
+    driver, reader = graph.add(Driver("driver"), Reader("reader"))
+    graph.plug(driver.sample, reader.speed)
+    guard = SensorGuard(reader, [Channel("speed", -10.0, 10.0)], DT, frozen_ticks=0, stale_ticks=4)
+    reported = {}
+    for t in range(14):
+        if t < 5:  # samples arrive until tick 4, then the driver stops
+            driver.sample.set(np.array([1.0 + t, 2.0]), t)
+        graph.fault_log.begin(t)
+        values = guard.read(t)
+        reported[t] = [(f.signal, f.cause, f.detail) for f in graph.fault_log.staged(t)]
+        guard.commit()
+        graph.fault_log.commit(t)
+        assert values[0].tolist() == [5.0, 2.0] if t >= 4 else [1.0 + t, 2.0]  # kept: nothing better
+    assert all(reported[t] == [] for t in range(9))  # 4 ticks without an update are allowed
+    assert all(reported[t] == [("reader.speed", "stale", "from driver.sample: last updated at tick 4")]
+               for t in range(9, 14))
