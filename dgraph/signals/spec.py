@@ -172,7 +172,7 @@ class Spec:
             raise SpecError(f"{where}: expected a scalar {self.dtype}, got {_short(value)}")
         if self.dtype == "float":
             out = float(value)
-            if math.isnan(out):
+            if math.isnan(out) and self.finite is not None:
                 raise SpecError(f"{where}: value is NaN")
             return out
         if self.dtype == "int":

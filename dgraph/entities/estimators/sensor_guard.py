@@ -18,7 +18,8 @@ and hands over a value the estimator can trust:
   sensor whose driver stopped; a real reading always carries noise, a simulated one always
   moves a little); an exact 0 is not taken for frozen (a joint at rest in a noiseless
   simulation, an unloaded axis);
-- **stale**: its source (a device's state) last updated more than ``stale_ticks`` ticks ago, as
+- **stale**: its source, a state (a device's reading; a computed output is stamped whenever it
+  is computed, so it is never taken for stale), last updated more than ``stale_ticks`` ticks ago, as
   seen every ``stale_ticks / 4`` ticks (a
   driver that stopped delivering a sensor; a slower sensor under a faster loop is stale for a
   tick or two, so the bound is a parameter): handled like a frozen reading, one fault per input;
@@ -30,7 +31,9 @@ and hands over a value the estimator can trust:
 A refused element is replaced by its prediction, the tick goes on, and a fault is reported
 (:mod:`dgraph.faults`) naming ``entity.input[index]``, the cause and the value. A frozen element
 is reported; a frozen position is replaced by its prediction, a frozen reading without a rate is
-kept (there is nothing better to use). The trusted values are what the next tick predicts from.
+kept (there is nothing better to use). The trusted values are what the next tick predicts from;
+a position whose rate is itself a substitute is predicted with a rate of 0, within its range (a
+driver that stopped sends neither: its last velocity is not integrated for ever).
 The first reading has no prediction: a bad element there is filled with a value in its range
 (the identity for a quaternion), checked for range only until it reads good once.
 
@@ -47,6 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import dgraph as dg
+from dgraph.signals.signal import State
 
 MAX_NAMED = 4
 """Elements named one by one in the faults of one reading at one tick (the rest are counted)."""
@@ -141,7 +145,7 @@ class SensorGuard:
         self._same = self._zero_same                   # consecutive ticks each element was bit-identical
         self._tolerance = self._step                   # max_step + growth replaced
         self._unknown: np.ndarray | None = None        # elements never read good (filled at the first tick)
-        self._next: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None] | None = None
+        self._next: tuple[np.ndarray, ...] | None = None  # trusted, raw, replaced, same, unknown, doubtful
         self._deviation, self._within = np.empty(n), np.empty(n, dtype=bool)
 
     def prediction(self) -> np.ndarray | None:
@@ -150,10 +154,16 @@ class SensorGuard:
         computed once, when the last tick committed."""
         return self._predicted
 
-    def _predict(self, trusted: np.ndarray) -> np.ndarray:
+    def _predict(self, trusted: np.ndarray, doubtful: np.ndarray | None) -> np.ndarray:
+        """``trusted``, each position moved by ``dt`` times its rate; a rate that is itself a
+        substitute (``doubtful``: replaced, frozen or stale) counts as 0, and the prediction then
+        stays in range (a driver that stopped must not integrate its last velocity for ever)."""
         predicted = trusted.copy()
         for position, rate in self._position_slices:
-            predicted[position] += self.dt * trusted[rate]
+            speed = trusted[rate] if doubtful is None else np.where(doubtful[rate], 0.0, trusted[rate])
+            predicted[position] += self.dt * speed
+        if doubtful is not None:
+            np.clip(predicted, self._lower, self._upper, out=predicted)
         predicted.flags.writeable = False
         return predicted
 
@@ -167,7 +177,7 @@ class SensorGuard:
         if (self._trusted is None or not unit or self._replaced is not self._zero_replaced or stale
                 or not self._fine(raw)):
             return self._checked(t, raw, stale)
-        self._next = (raw, raw, self._zero_replaced, self._zero_same, None)
+        self._next = (raw, raw, self._zero_replaced, self._zero_same, None, None)
         self.faulty = 0
         return self._split(raw)
 
@@ -189,7 +199,7 @@ class SensorGuard:
             return False
         if not (self.frozen_ticks and np.count_nonzero(np.equal(raw, self._raw, out=within))):
             return True
-        return not (within & self._frozen_test & (raw != 0.0)).any()  # a repeated 0 cannot be frozen
+        return not (within & self._frozen_candidates() & (raw != 0.0)).any()  # a repeated 0 cannot be frozen
 
     def _stale(self, t: int) -> list[tuple[int, int]]:
         """``(channel, tick of its source's last update)`` of each input whose source last
@@ -197,8 +207,8 @@ class SensorGuard:
         ticks, and every tick while one is stale: found within 1.25 ``stale_ticks``)."""
         stale = []
         for channel, inp in enumerate(self._inputs):
-            source = inp._source
-            updated = source.time if source is not None else None
+            source = inp._source  # a computed output is stamped when computed, a constant has none
+            updated = source.time if isinstance(source, State) else None
             if updated is not None and t - updated > self.stale_ticks:
                 stale.append((channel, updated))
         return stale
@@ -234,7 +244,9 @@ class SensorGuard:
         if unknown is not None:  # a position whose rate is unknown has no prediction either
             for position, rate in self._position_slices:
                 unknown[position] |= unknown[rate]
-        self._next = (trusted, raw, replaced, same, unknown if unknown is not None and unknown.any() else None)
+        doubtful = bad if held is None else bad | held
+        self._next = (trusted, raw, replaced, same, unknown if unknown is not None and unknown.any() else None,
+                      doubtful if doubtful.any() else None)
         return self._split(trusted)
 
     def _frozen(self, same: np.ndarray, raw: np.ndarray, bad: np.ndarray) -> np.ndarray:
@@ -242,12 +254,17 @@ class SensorGuard:
         is never frozen (a joint at rest in a noiseless simulation, an unloaded axis), nor a
         position whose trusted rate moves it by less than ``max_step`` over ``frozen_ticks``
         ticks (a quantized encoder at rest repeats its value)."""
-        frozen = (same >= self.frozen_ticks) & self._frozen_test & ~bad & (raw != 0.0)
-        if frozen.any() and self._position_slices:
-            for position, rate in self._position_slices:
-                travel = np.abs(self._trusted[rate]) * (self.frozen_ticks * self.dt)
-                frozen[position] &= travel > self._step[position]
-        return frozen
+        repeated = (same >= self.frozen_ticks) & ~bad & (raw != 0.0)
+        return repeated & self._frozen_candidates() if repeated.any() else repeated
+
+    def _frozen_candidates(self) -> np.ndarray:
+        """The elements a repeated reading can be frozen in: those tested, but a position whose
+        trusted rate moves it by less than ``max_step`` over ``frozen_ticks`` ticks (at rest)."""
+        candidates = self._frozen_test.copy()
+        for position, rate in self._position_slices:
+            travel = np.abs(self._trusted[rate]) * (self.frozen_ticks * self.dt)
+            candidates[position] &= travel > self._step[position]
+        return candidates
 
     def _orient_quaternions(self, raw: np.ndarray) -> bool:
         """Whether every quaternion's norm is 1 within the tolerance (those that are not are
@@ -297,7 +314,8 @@ class SensorGuard:
         for index, channel, whole in elements[:MAX_NAMED]:  # the rest counted (a dead sensor: every tick)
             if whole:
                 part = self._slices[channel]
-                error = np.abs(raw[part] - predicted[part])
+                with np.errstate(invalid="ignore"):  # inf - inf at the first tick: NaN, taken as the worst
+                    error = np.abs(raw[part] - predicted[part])
                 index = part.start + int(np.argmax(np.where(np.isfinite(error), error, np.inf)))
             cause, detail = self._cause(index, raw[index], predicted)
             where = self._source(channel)
@@ -371,8 +389,8 @@ class SensorGuard:
     def commit(self) -> None:
         """The tick committed: its trusted readings become the base of the next prediction."""
         if self._next is not None:
-            self._trusted, self._raw, replaced, self._same, self._unknown = self._next
-            self._predicted = self._predict(self._trusted)
+            self._trusted, self._raw, replaced, self._same, self._unknown, doubtful = self._next
+            self._predicted = self._predict(self._trusted, doubtful)
             if replaced is not self._replaced:
                 self._replaced = replaced
                 self._tolerance = self._step if replaced is self._zero_replaced else \

@@ -503,3 +503,56 @@ def test_a_reading_whose_source_stops_updating_is_stale_after_stale_ticks():
     assert all(reported[t] == [] for t in range(9))  # 4 ticks without an update are allowed
     assert all(reported[t] == [("reader.speed", "stale", "from driver.sample: last updated at tick 4")]
                for t in range(9, 14))
+
+
+class Joint(dg.Entity):
+    """A joint driver's position and velocity, committed while samples arrive."""
+
+    has_state = True
+    position = dg.State(shape=(1,), finite=None)
+    velocity = dg.State(shape=(1,), finite=None)
+
+
+class JointReader(dg.Entity):
+    position = dg.Input(shape=(1,), finite=None)
+    velocity = dg.Input(shape=(1,), finite=None)
+
+
+def test_a_stale_position_whose_velocity_is_stale_too_is_held_where_it_was_in_range():
+    """A driver that stops sends neither: the position must not integrate its last velocity for
+    ever (it would leave its range and then be refused as a jump at every tick)."""
+    graph = dg.Graph(dt=DT, name="stopped")
+    joint, reader = graph.add(Joint("joint"), JointReader("reader"))
+    graph.plug(joint.position, reader.position)
+    graph.plug(joint.velocity, reader.velocity)
+    guard = SensorGuard(reader, [Channel("position", -1.0, 1.0, 0.05, rate="velocity"),
+                                 Channel("velocity", -5.0, 5.0, 1.0)], DT, frozen_ticks=0, stale_ticks=4)
+    positions = []
+    for t in range(300):
+        if t < 5:
+            joint.position.set(np.array([0.5 + 0.01 * t]), t)
+            joint.velocity.set(np.array([1.0]), t)
+        graph.fault_log.begin(t)
+        positions.append(guard.read(t)[0][0])
+        guard.commit()
+        graph.fault_log.commit(t)
+    assert max(positions) < 0.62 and positions[-1] == positions[-2]  # held, in range: not 0.54 + 2.95
+    late = {(f.signal, f.cause) for f in graph.fault_log.faults if f.tick > 250}
+    assert late == {("reader.position", "stale"), ("reader.velocity", "stale")}  # no jump at every tick
+
+
+def test_a_computed_output_is_never_stale():
+    """A constant's output is computed once and keeps its first stamp: not a stale driver."""
+    from dgraph.entities.operators import Constant
+
+    graph = dg.Graph(dt=DT, name="computed")
+    reader = graph.add(Reader("reader"))
+    constant = graph.add(Constant("c", value=[1.0, 2.0]))
+    graph.plug(constant.output, reader.speed)
+    guard = SensorGuard(reader, [Channel("speed", -10.0, 10.0)], DT, frozen_ticks=0, stale_ticks=2)
+    for t in range(20):
+        graph.fault_log.begin(t)
+        guard.read(t)
+        guard.commit()
+        graph.fault_log.commit(t)
+    assert constant.output.time == 0 and graph.fault_log.faults == []
