@@ -249,20 +249,25 @@ def test_a_failed_tick_leaves_no_fault_and_its_retry_records_it_once(tmp_path):
     assert data["fault_tick"].tolist() == [2] and g.fault_log.degraded_ticks == 1
 
 
-def test_the_rrd_has_the_faults_text_log(tmp_path):
+def logged_faults(rrd: Path) -> list[tuple[int, list[str], list[str]]]:
+    """``(tick, texts, levels)`` of the ``faults`` text log of an .rrd file."""
     import rerun.chunk as chunk
 
-    g = faulty_graph(tmp_path, rerun="save")
-    g.run(ticks=5)
-    g.close()
-    assert (tmp_path / "faults.rrd").stat().st_size > 0
     logged = []
-    for ch in chunk.RrdReader(str(tmp_path / "faults.rrd")).stream():
+    for ch in chunk.RrdReader(str(rrd)).stream():
         batch = ch.to_record_batch()
         if str(ch.entity_path) == "/faults" and "TextLog:text" in batch.schema.names:
             logged += zip(batch.column("tick").to_pylist(), batch.column("TextLog:text").to_pylist(),
                           batch.column("TextLog:level").to_pylist(), strict=True)
-    assert logged == [(2, ["tick 2: flaky.y: NaN (nan); replaced by 0"], ["WARN"])]
+    return logged
+
+
+def test_the_rrd_has_the_faults_text_log(tmp_path):
+    g = faulty_graph(tmp_path, rerun="save")
+    g.run(ticks=5)
+    g.close()
+    assert (tmp_path / "faults.rrd").stat().st_size > 0
+    assert logged_faults(tmp_path / "faults.rrd") == [(2, ["tick 2: flaky.y: NaN (nan); replaced by 0"], ["WARN"])]
     ticks, values = read_series(str(tmp_path / "faults.rrd"))["/signals/flaky/y"]
     assert ticks.tolist() == [0, 1, 2, 3, 4] and values.ravel().tolist() == [0.0, 1.0, 0.0, 3.0, 4.0]
 
@@ -278,3 +283,11 @@ def test_a_recorder_keeps_at_most_kept_faults_and_counts_every_degraded_tick(tmp
     for t in range(4):  # four degraded ticks, one fault each
         rec._keep_faults([Fault(t, "s.x", "NaN", "kept")])
     assert [f.tick for f in rec._faults] == [0, 1] and rec._degraded == [0, 1, 2, 3]
+
+
+def test_two_recorders_of_one_recording_log_each_fault_once(tmp_path):
+    g = faulty_graph(tmp_path, rerun="save")
+    g.add(Recorder("rec2", signals=["dev.x"], rerun="save", rrd_path=str(tmp_path / "faults.rrd"), flush_every=2))
+    g.run(ticks=5)
+    g.close()
+    assert logged_faults(tmp_path / "faults.rrd") == [(2, ["tick 2: flaky.y: NaN (nan); replaced by 0"], ["WARN"])]

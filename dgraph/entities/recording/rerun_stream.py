@@ -206,6 +206,7 @@ class RerunStream:
         elif mode == "serve":
             self._serve(SERVE if serve is None else serve)
         self._series_fields: dict[str, Any] = {}  # the Arrow field of each series sent, by entity path
+        self._faults_through = -1  # the last tick whose faults were sent (recorders sharing the sink send each once)
         self.users = 1
         self.application_id = application_id
         self.owner: object = None
@@ -250,7 +251,12 @@ class RerunStream:
         self.send_batch(ticks, fields, columns)
 
     def send_faults(self, faults: list[Fault]) -> None:
-        """Log the faults as warnings on the ``faults`` text log, each at its tick, in one batch."""
+        """Log the faults as warnings on the ``faults`` text log, each at its tick, in one batch;
+        those of a tick already sent (by another recorder of the same graph) are left out."""
+        faults = [fault for fault in faults if fault.tick > self._faults_through]
+        if not faults:
+            return
+        self._faults_through = faults[-1].tick
         ticks = np.array([fault.tick for fault in faults], dtype=np.int64)
         columns = self._rr.TextLog.columns(text=[str(fault) for fault in faults], level=["WARN"] * len(faults))
         self.rec.send_columns("faults", indexes=self.indexes(ticks), columns=columns)
