@@ -13,7 +13,8 @@ import dgraph as dg
 from dgraph.entities.devices import KinematicDevice
 from dgraph.entities.operators import Constant
 from dgraph.entities.recording import Recorder, RobotView, open_stream, read_series
-from dgraph.entities.recording.robot_view import load_robot, quaternions_xyzw
+from dgraph.entities.recording.robot_view import quaternions_xyzw
+from dgraph.entities.robot.robot_state import load_robot
 from tests.conftest import Scale, Ticker
 
 pin = pytest.importorskip("pinocchio")
@@ -208,3 +209,11 @@ def test_parameters_are_checked():
         RobotView("v", decimation=0)
     assert RobotView("v").q.spec.shape == (39,)
     assert RobotView("v").flush_every == 1000 and RobotView("v", rerun="spawn").flush_every == 200
+
+
+def test_the_kinematics_and_the_3d_view_share_one_load_of_the_robot():
+    """TALOS's URDF and meshes are read once per process (~0.6 s): the Pinocchio model the
+    entities use is the one of the loaded robot the view draws."""
+    from dgraph.entities.robot import load_model
+
+    assert load_model("talos") is load_robot("talos").model

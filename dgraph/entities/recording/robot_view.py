@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import re
 from pathlib import Path
 from typing import Any
@@ -11,20 +10,13 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.recording.rerun_stream import RerunStream, component_field, default_flush_every, open_stream_for
+from dgraph.entities.robot.robot_state import load_robot
 
 FLOOR_HALF_SIZE = 2.0
 """Half side of the floor square, in metres."""
 
 MESH_TYPES = {".stl": "model/stl", ".obj": "model/obj", ".glb": "model/gltf-binary", ".gltf": "model/gltf+json"}
 """Mesh files Rerun's ``Asset3D`` reads, by (case-insensitive) extension."""
-
-
-@functools.lru_cache(maxsize=4)
-def load_robot(name: str) -> Any:
-    """``example_robot_data.load(name)`` (cached: the models are only read, never changed)."""
-    import example_robot_data as erd
-
-    return erd.load(name)
 
 
 def quaternions_xyzw(rotations: np.ndarray) -> np.ndarray:
