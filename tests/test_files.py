@@ -935,3 +935,20 @@ def test_a_foreign_exception_of_a_constructor_is_chained_and_an_interrupt_is_not
     Exploding.error = KeyboardInterrupt()
     with pytest.raises(KeyboardInterrupt):
         loads("name: x\nentities:\n  e: {type: Exploding}\n")
+
+
+@pytest.mark.parametrize("loader", ["libyaml", "python"])
+def test_numbers_with_an_exponent_are_read_as_yaml_1_2_reads_them(loader, monkeypatch):
+    """``1e3``, ``2.5e1``, ``-1E-2``, ``.5e1`` (no dot or no sign in the exponent) are floats, as
+    YAML 1.2 reads them; PyYAML's YAML 1.1 resolver made them strings. ``1e3x`` stays a string."""
+    from dgraph.files import source
+
+    if loader == "python":
+        monkeypatch.setattr(source, "_SAFE_LOADER", source.PythonLoader)
+    g = loads("name: x\nentities:\n  s: {type: Sinusoid, params: {amplitude: 1.0, frequency: .5e1, ramp: 2.5e1}}\n"
+              "  k: {type: Gain}\nset: {k.gain: 1e3, k.input: -1E-2}\n")
+    assert g["s"].params["ramp"] == 25.0 and g["s"].params["frequency"] == 5.0
+    assert g["k.gain"].value == 1000.0 and g["k.input"].value == -0.01
+    data = dg.files.parse("entities: {}\nset: {a.b: [1e3, 2.5E+1, 1e3x, e3, 1.e2, 12]}\n")
+    assert data["set"]["a.b"] == [1000.0, 25.0, "1e3x", "e3", 100.0, 12]
+    assert [type(v) for v in data["set"]["a.b"]] == [float, float, str, str, float, int]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import stat
 from dataclasses import dataclass
 from pathlib import Path
@@ -81,6 +82,19 @@ class PythonLoader(yaml.SafeLoader):
             raise _LimitExceeded(_too_deep(), self.line + 1)
 
 
+_YAML12_FLOAT = re.compile(r"^[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)[eE][-+]?[0-9]+$")
+"""A YAML 1.2 core-schema float with an exponent (``1e3``, ``2.5e1``, ``-1E-2``, ``.5e1``): YAML 1.1,
+which PyYAML reads, requires a dot and a signed exponent, and resolves these as strings."""
+
+
+def _read_yaml12_floats(loader: type) -> None:
+    """Resolve :data:`_YAML12_FLOAT` scalars as floats with ``loader`` (the resolver is Python
+    code in libyaml's loader too); the other YAML 1.1 resolvers stay."""
+    loader.add_implicit_resolver(_FLOAT, _YAML12_FLOAT, list("-+0123456789."))
+
+
+_read_yaml12_floats(PythonLoader)
+
 _SAFE_LOADER: type = PythonLoader
 """libyaml's safe loader when PyYAML was built with it (10x faster on large files), else PyYAML's."""
 if getattr(yaml, "__with_libyaml__", False):
@@ -99,6 +113,7 @@ if getattr(yaml, "__with_libyaml__", False):
                 raise _LimitExceeded(_too_many(), None)
             return super().resolve(kind, value, implicit)
 
+    _read_yaml12_floats(LibyamlLoader)
     _SAFE_LOADER = LibyamlLoader
 
 
