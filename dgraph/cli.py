@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import select
 import sys
 import time
 from pathlib import Path
@@ -250,7 +251,15 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     _take_file_back(args, parser)
     try:
-        return args.func(args)
+        code = args.func(args)
+        sys.stdout.flush()  # a broken pipe shows here, not at exit
+        return code
+    except BrokenPipeError as exc:  # before OSError, which it is
+        if _stdout_closed():  # output piped into `head` and closed: not an error
+            _quiet_stdout()
+            return 0
+        print(f"dgraph {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_ERROR
     except DGraphError as exc:
         print(f"dgraph {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
@@ -260,9 +269,27 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:  # output piped into `head` and closed: not an error
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
+
+
+def _stdout_closed() -> bool:
+    """Whether nothing reads standard output any more (a pipe whose reader has gone polls as an
+    error); a broken pipe elsewhere (a viewer's socket) is an error to report."""
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+        return any(event & (select.POLLERR | select.POLLHUP) for _, event in poller.poll(0))
+    except (AttributeError, OSError, ValueError):  # no poll (Windows), no file descriptor
+        return True
+
+
+def _quiet_stdout() -> None:
+    """The Python documentation's way out of a broken pipe: point standard output at devnull, so
+    that flushing it again at exit does not raise."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # stdout is not a file (captured in a test)
+        pass
 
 
 if __name__ == "__main__":

@@ -200,3 +200,28 @@ def test_debug_checks_name_the_first_signal_that_computes_a_non_finite_value(tmp
     checked = dgraph_cli(*args, "--debug-checks", cwd=tmp_path)
     assert plain.returncode == 2 and "robot.q: staged value contains inf" in plain.stderr, plain.stderr
     assert checked.returncode == 2 and "setpoint.output at tick 0: computed a value containing inf" in checked.stderr
+
+
+
+def test_a_closed_pipe_ends_quietly_with_status_0(tmp_path):
+    exe = Path(sys.executable).with_name("dgraph")
+    for args in (["entities"], ["show", PD, "--signals"], ["profile", PD, "--ticks", "50"]):
+        shell = subprocess.run(["bash", "-c", 'set -o pipefail; "$@" | head -1', "-", str(exe), *args],
+                               capture_output=True, text=True, cwd=tmp_path, timeout=300)
+        assert shell.returncode == 0 and shell.stderr == "", (args, shell.stderr)
+        assert len(shell.stdout.splitlines()) == 1
+    # the pipe closed by the reader after one line, with dgraph's own status
+    proc = subprocess.Popen([str(exe), "entities"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            cwd=tmp_path)
+    assert proc.stdout.readline().startswith(b"Add:")
+    proc.stdout.close()
+    assert proc.wait(timeout=300) == 0
+    assert proc.stderr.read() == b""
+    proc.stderr.close()
+
+
+def test_an_unwritable_stdout_is_still_an_error(tmp_path):
+    with open("/dev/full", "w") as full:
+        result = subprocess.run([str(Path(sys.executable).with_name("dgraph")), "entities"], stdout=full,
+                                stderr=subprocess.PIPE, text=True, cwd=tmp_path, timeout=300)
+    assert result.returncode == 2 and "dgraph entities: error: [Errno 28]" in result.stderr
