@@ -952,3 +952,27 @@ def test_numbers_with_an_exponent_are_read_as_yaml_1_2_reads_them(loader, monkey
     data = dg.files.parse("entities: {}\nset: {a.b: [1e3, 2.5E+1, 1e3x, e3, 1.e2, 12]}\n")
     assert data["set"]["a.b"] == [1000.0, 25.0, "1e3x", "e3", 100.0, 12]
     assert [type(v) for v in data["set"]["a.b"]] == [float, float, str, str, float, int]
+
+
+@pytest.mark.parametrize("loader", ["libyaml", "python"])
+def test_a_yaml_syntax_error_is_one_line_with_its_file_line_and_column(loader, tmp_path, monkeypatch):
+    """A mis-indented key, an unclosed bracket, ``a: b: c``: the file, the line (1-based) and the
+    column where the parser stopped, PyYAML's (or libyaml's) problem and the construct it was in."""
+    from dgraph.files import source
+
+    if loader == "python":
+        monkeypatch.setattr(source, "_SAFE_LOADER", source.PythonLoader)
+    cases = [
+        ("name: x\nentities:\n  a: {type: Gain}\n   b: {type: Gain}\n", 4, 4,
+         "in a block mapping started at line 3, column 3 (check the indentation)"),
+        ("name: x\nentities:\n  a: {type: Gain}\nplugs: [a.output -> a.input\n", 5, 1,
+         "in a flow sequence started at line 4, column 8"),
+        ("entities: {}\nname: a: b\n", 2, 8, "mapping values are not allowed"),
+    ]
+    for text, line, column, fragment in cases:
+        path = write(tmp_path, "bad.yaml", text)
+        error = refused(dg.load, path)
+        message = str(error)
+        assert (error.file, error.line) == (str(path), line), message
+        assert message.startswith(f"{path}:{line}: invalid YAML at column {column}: "), message
+        assert fragment in message and "\n" not in message, message

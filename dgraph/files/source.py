@@ -264,7 +264,7 @@ def plain_data(text: str, file: str) -> tuple[Any, Document]:
         problem = getattr(exc, "problem", None) or str(exc)
         if "maximum nesting depth" in problem:  # libyaml's own limit, past MAX_DEPTH
             raise GraphFileError(_too_deep(), file=file, line=mark.line + 1 if mark else None) from exc
-        raise GraphFileError(f"invalid YAML: {problem}", file=file,
+        raise GraphFileError(_yaml_reason(exc, problem), file=file,
                              line=mark.line + 1 if mark else None) from exc
     except _LimitExceeded as exc:
         raise GraphFileError(str(exc), file=file, line=exc.line) from exc
@@ -274,6 +274,34 @@ def plain_data(text: str, file: str) -> tuple[Any, Document]:
         if loader is not None:
             loader.dispose()
     return data, doc
+
+
+_TOKEN_WORDS = (("'<stream end>'", "the end of the file"), ("<block end>", "the end of the block"),
+                ("'<block mapping start>'", "a more indented key"))
+"""PyYAML's names of tokens, in words."""
+
+
+def _yaml_reason(exc: yaml.YAMLError, problem: str) -> str:
+    """A YAML syntax error in one line: the column it was found at, PyYAML's or libyaml's
+    problem, and the construct it was found in (``the block mapping at line 2, column 3``)
+    when that is short; the line is the error's own. A block construct hints at indentation."""
+    problem = " ".join(problem.split())
+    for token, words in _TOKEN_WORDS:
+        problem = problem.replace(token, words)
+    mark = getattr(exc, "problem_mark", None)
+    where = f" at column {mark.column + 1}" if mark is not None else ""
+    context = " ".join((getattr(exc, "context", None) or "").split())
+    context_mark = getattr(exc, "context_mark", None)
+    inside = ""
+    construct = context.removeprefix("while parsing ").removeprefix("while scanning ")
+    if construct.startswith(("a ", "an ")) and len(construct) <= 40:
+        inside = f", in {construct}"
+        if context_mark is not None and (mark is None or (context_mark.line, context_mark.column)
+                                         != (mark.line, mark.column)):
+            inside += f" started at line {context_mark.line + 1}, column {context_mark.column + 1}"
+        if "block" in construct:
+            inside += " (check the indentation)"
+    return f"invalid YAML{where}: {problem}{inside}"
 
 
 def _node_error(doc: Document, message: str, node: yaml.Node, path: tuple[Any, ...]) -> GraphFileError:
