@@ -145,6 +145,9 @@ def cmd_check(args: argparse.Namespace) -> int:
     from dgraph.registry import plugin_errors
 
     graph, problems = check(args.file)
+    if not graph.roles()["stateful"]:  # what `run` refuses before its first tick
+        problems.append(f"{args.file}: graph {graph.name!r} has no device or stateful entity to step "
+                        "(dgraph run would refuse it)")
     problems += list(plugin_errors().values())
     if problems:
         print(f"{args.file}: {len(problems)} problem(s)")

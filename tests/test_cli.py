@@ -225,3 +225,14 @@ def test_an_unwritable_stdout_is_still_an_error(tmp_path):
         result = subprocess.run([str(Path(sys.executable).with_name("dgraph")), "entities"], stdout=full,
                                 stderr=subprocess.PIPE, text=True, cwd=tmp_path, timeout=300)
     assert result.returncode == 2 and "dgraph entities: error: [Errno 28]" in result.stderr
+
+
+def test_check_refuses_what_run_refuses_a_graph_with_nothing_to_step(tmp_path, capsys):
+    stateless = tmp_path / "stateless.yaml"
+    stateless.write_text("entities:\n  c: {type: Constant, params: {value: [1.0]}}\n")
+    assert main(["run", str(stateless), "--ticks", "1"]) == 2
+    assert "has no device or stateful entity to step" in capsys.readouterr().err
+    assert main(["check", str(stateless)]) == 1
+    out = capsys.readouterr().out
+    assert "1 problem(s)" in out and "OK" not in out
+    assert f"{stateless}: graph 'stateless' has no device or stateful entity to step" in out
