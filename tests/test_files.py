@@ -976,3 +976,28 @@ def test_a_yaml_syntax_error_is_one_line_with_its_file_line_and_column(loader, t
         assert (error.file, error.line) == (str(path), line), message
         assert message.startswith(f"{path}:{line}: invalid YAML at column {column}: "), message
         assert fragment in message and "\n" not in message, message
+
+
+def test_set_options_are_read_by_the_files_loader_and_their_errors_name_the_option(tmp_path):
+    """``--set`` texts read with the graph files' loader (``1e3`` a float, ``[1, 2]`` a list); a text
+    that is not YAML, a mapping, no value or a value the graph refuses: an error naming the
+    option (``--set k.gain``) and the text, without the line of a document it was wrapped in."""
+    from dgraph.files import COMMAND_LINE, command_line_settings
+
+    path = write(tmp_path, "graph.yaml", GOOD)
+    g = dg.load(path, command_line_settings(["k.gain=1e3", "dev.q0=[1, 2]"]))
+    assert g["k.gain"].value == 1000.0 and list(g["dev.q"].value) == [1.0, 2.0]
+    for item, fragment in [("k.gain=[1,", "'[1,': invalid YAML at its end"),
+                           ("k.gain={a: 1", "'{a: 1': invalid YAML at its end: "),
+                           ("k.gain=\"x", "'\"x': invalid YAML at column 3"),
+                           ("k.gain=a: b", "'a: b': expected a scalar or a list, got a mapping"),
+                           ("k.gain=", "missing value"), ("k.gain= ", "missing value")]:
+        error = refused(command_line_settings, [item])
+        assert (error.file, error.line, error.key) == (COMMAND_LINE, None, "--set k.gain"), str(error)
+        assert str(error).startswith(f"{COMMAND_LINE} [--set k.gain]: {fragment}"), str(error)
+        assert "line" not in str(error).removeprefix(COMMAND_LINE) and "\n" not in str(error), str(error)
+    for overrides in (command_line_settings(["k.gain=abc"]), {"k.gain": "[1,"}):
+        error = refused(dg.load, path, overrides)
+        located(error, COMMAND_LINE, None, "--set k.gain")
+        assert "expected a scalar float" in str(error)
+    assert "expected entity.name=value" in str(refused(command_line_settings, ["k=1"]))

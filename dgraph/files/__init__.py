@@ -38,7 +38,8 @@ describes::
     record: [com_reference.velocity]       # appended
 
 ``overrides`` is the older name of ``set`` in such a file. ``--set`` on the command line is
-applied last, over every file.
+applied last, over every file (its texts read by ``command_line_settings``, whose errors name
+the option).
 
 Safety: the YAML is composed with the safe loader and converted node by node; only plain
 scalars, lists and mappings are accepted (no tags, anchors, aliases or merge keys), so a file
@@ -60,7 +61,15 @@ parameters from and to a file's folder) and :mod:`~dgraph.files.writing` (``dump
 """
 
 from dgraph.files.build import check, load, loads
-from dgraph.files.composition import MAX_EXTENDS, RECORDER_NAME, SCALARS, declared_entities, parse
+from dgraph.files.composition import (
+    MAX_EXTENDS,
+    RECORDER_NAME,
+    SCALARS,
+    command_line_settings,
+    command_line_value,
+    declared_entities,
+    parse,
+)
 from dgraph.files.paths import MAX_DATA_BYTES
 from dgraph.files.schema import NAME_RE, PLUG_PATTERN, PLUG_RE, SCHEMA, SIGNAL_RE, UNPLUG_PATTERN
 from dgraph.files.source import COMMAND_LINE, MAX_BYTES, MAX_DEPTH, MAX_NODES, MAX_NUMBER_CHARS, read_text
@@ -68,4 +77,5 @@ from dgraph.files.writing import dumps, save, to_plain
 
 __all__ = ["COMMAND_LINE", "MAX_BYTES", "MAX_DATA_BYTES", "MAX_DEPTH", "MAX_EXTENDS", "MAX_NODES", "MAX_NUMBER_CHARS",
            "NAME_RE", "PLUG_PATTERN", "PLUG_RE", "RECORDER_NAME", "SCALARS", "SCHEMA", "SIGNAL_RE", "UNPLUG_PATTERN",
-           "check", "declared_entities", "dumps", "load", "loads", "parse", "read_text", "save", "to_plain"]
+           "check", "command_line_settings", "command_line_value", "declared_entities", "dumps", "load", "loads",
+           "parse", "read_text", "save", "to_plain"]

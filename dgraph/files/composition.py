@@ -54,6 +54,36 @@ class CommandLine(Document):
                               signal=cause.signal if cause else None)
 
 
+def command_line_value(key: str, text: str) -> Any:
+    """The value of ``--set key=text``: ``text`` read as YAML, a scalar or a list (``1.5``,
+    ``[0, 0.05, 0]``, ``true``, ``abc``) with the loader of graph files; a mistake is a
+    :class:`GraphFileError` naming the option, without a line."""
+    try:
+        value = plain_data(text, COMMAND_LINE)[0] if text.strip() else None
+    except GraphFileError as exc:
+        where = str(GraphFileError("", file=exc.file, line=exc.line, key=exc.key))
+        reason = "missing value" if "file is empty" in str(exc) else str(exc).removeprefix(where)
+        raise CommandLine().error(f"{text!r}: {reason}", (key,)) from exc
+    if not text.strip():
+        raise CommandLine().error("missing value", (key,))
+    if isinstance(value, dict):
+        raise CommandLine().error(f"{text!r}: expected a scalar or a list, got a mapping", (key,))
+    return value
+
+
+def command_line_settings(items: Iterable[str]) -> dict[str, Any]:
+    """The settings of ``--set entity.name=value`` options, each value read by
+    :func:`command_line_value`; what :func:`~dgraph.files.load` takes as ``overrides``."""
+    out: dict[str, Any] = {}
+    for item in items:
+        key, eq, text = item.partition("=")
+        key = key.strip()
+        if not eq or key.count(".") != 1 or not all(key.partition(".")[::2]):
+            raise GraphFileError(f"--set {item!r}: expected entity.name=value", file=COMMAND_LINE)
+        out[key] = command_line_value(key, text)
+    return out
+
+
 def _parse_file(text: str, file: str) -> tuple[dict[str, Any], Document]:
     """Parse and schema-check the text of one file; returns the data and its line map."""
     data, doc = plain_data(text, file)

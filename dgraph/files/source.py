@@ -264,7 +264,7 @@ def plain_data(text: str, file: str) -> tuple[Any, Document]:
         problem = getattr(exc, "problem", None) or str(exc)
         if "maximum nesting depth" in problem:  # libyaml's own limit, past MAX_DEPTH
             raise GraphFileError(_too_deep(), file=file, line=mark.line + 1 if mark else None) from exc
-        raise GraphFileError(_yaml_reason(exc, problem), file=file,
+        raise GraphFileError(_yaml_reason(exc, problem, one_line=file == COMMAND_LINE), file=file,
                              line=mark.line + 1 if mark else None) from exc
     except _LimitExceeded as exc:
         raise GraphFileError(str(exc), file=file, line=exc.line) from exc
@@ -281,15 +281,16 @@ _TOKEN_WORDS = (("'<stream end>'", "the end of the file"), ("<block end>", "the 
 """PyYAML's names of tokens, in words."""
 
 
-def _yaml_reason(exc: yaml.YAMLError, problem: str) -> str:
+def _yaml_reason(exc: yaml.YAMLError, problem: str, one_line: bool = False) -> str:
     """A YAML syntax error in one line: the column it was found at, PyYAML's or libyaml's
     problem, and the construct it was found in (``the block mapping at line 2, column 3``)
-    when that is short; the line is the error's own. A block construct hints at indentation."""
+    when that is short; the line is the error's own. A block construct hints at indentation.
+    ``one_line`` (a value of the command line) names columns only, or the end of the value."""
     problem = " ".join(problem.split())
     for token, words in _TOKEN_WORDS:
         problem = problem.replace(token, words)
     mark = getattr(exc, "problem_mark", None)
-    where = f" at column {mark.column + 1}" if mark is not None else ""
+    where = "" if mark is None else f" at column {mark.column + 1}" if not (one_line and mark.line) else " at its end"
     context = " ".join((getattr(exc, "context", None) or "").split())
     context_mark = getattr(exc, "context_mark", None)
     inside = ""
@@ -298,7 +299,8 @@ def _yaml_reason(exc: yaml.YAMLError, problem: str) -> str:
         inside = f", in {construct}"
         if context_mark is not None and (mark is None or (context_mark.line, context_mark.column)
                                          != (mark.line, mark.column)):
-            inside += f" started at line {context_mark.line + 1}, column {context_mark.column + 1}"
+            line = "" if one_line and not context_mark.line else f" line {context_mark.line + 1},"
+            inside += f" started at{line} column {context_mark.column + 1}"
         if "block" in construct:
             inside += " (check the indentation)"
     return f"invalid YAML{where}: {problem}{inside}"
