@@ -7,6 +7,10 @@
     dgraph profile FILE [--ticks N] [--set entity.name=value ...]
     dgraph show FILE --format dot|mermaid [--signals] [-o OUT]
     dgraph entities [TYPE]
+    dgraph --version
+
+``python -m dgraph ...`` is the same command. Output piped into a command that stops reading
+(``dgraph entities | head -1``) ends the command quietly, with status 0.
 
 Values given to ``--set`` are parsed as YAML scalars or flow lists (``1.5``, ``[0, 0.05, 0]``,
 ``true``), with the same safe loader as graph files. Errors print one line naming the file,
@@ -29,6 +33,19 @@ if TYPE_CHECKING:
     from dgraph.graph import Graph
 
 EXIT_ERROR = 2
+
+
+def version() -> str:
+    """The installed version of dgraph (its package metadata), else ``dgraph.__version__``."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as installed
+
+    try:
+        return installed("dgraph")
+    except PackageNotFoundError:
+        import dgraph
+
+        return str(getattr(dgraph, "__version__", "unknown"))
 
 
 def _parse_sets(items: list[str]) -> dict[str, Any]:
@@ -199,38 +216,44 @@ def cmd_entities(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``dgraph`` command."""
     parser = argparse.ArgumentParser(prog="dgraph", description="Run, check and draw dgraph graph files.")
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser.add_argument("--version", action="version", version=f"dgraph {version()}",
+                        help="print the installed version of dgraph and exit")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                                help="what to do (dgraph COMMAND -h for its options)")
+    file_help = "the graph file (YAML)"
+    set_help = "override a parameter or set an input constant (repeatable)"
     run = sub.add_parser("run", help="run a graph file")
-    run.add_argument("file", nargs="?")
+    run.add_argument("file", nargs="?", help=file_help)
     length = run.add_mutually_exclusive_group()
-    length.add_argument("--duration", type=float, help="seconds of control time")
-    length.add_argument("--ticks", type=int, help="number of ticks")
-    run.add_argument("--set", action="append", default=[], metavar="ENTITY.NAME=VALUE",
-                     help="override a parameter or set an input constant (repeatable)")
+    length.add_argument("--duration", type=float, metavar="S",
+                        help="seconds of control time (default: the file's duration)")
+    length.add_argument("--ticks", type=int, metavar="N", help="number of ticks")
+    run.add_argument("--set", action="append", default=[], metavar="ENTITY.NAME=VALUE", help=set_help)
     run.add_argument("--rerun", nargs="+", metavar="MODE",
                      help="save [PATH] (default out/NAME.rrd), spawn, serve or off")
     run.add_argument("--rerun-bind", metavar="ADDRESS",
                      help="IP address that --rerun serve listens on (default 127.0.0.1, this machine only; "
                           "0.0.0.0 or :: opens the gRPC server and the web viewer to the network)")
-    run.add_argument("--npz", help="also write the recorded signals to this .npz file")
+    run.add_argument("--npz", metavar="PATH", help="also write the recorded signals to this .npz file")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     run.add_argument("--debug-checks", action="store_true",
                      help="check every computed value (shape, NaN) and every read against its declared "
                           "dependencies (slow; names the first signal that goes wrong)")
     run.set_defaults(func=cmd_run)
     check = sub.add_parser("check", help="load and validate a graph file")
-    check.add_argument("file")
+    check.add_argument("file", help=file_help)
     check.set_defaults(func=cmd_check)
     prof = sub.add_parser("profile", help="time each entity over a run (per tick)")
-    prof.add_argument("file")
-    prof.add_argument("--ticks", type=int, default=1000, help="number of ticks (default 1000)")
-    prof.add_argument("--set", action="append", default=[], metavar="ENTITY.NAME=VALUE")
+    prof.add_argument("file", help=file_help)
+    prof.add_argument("--ticks", type=int, default=1000, metavar="N", help="number of ticks (default 1000)")
+    prof.add_argument("--set", action="append", default=[], metavar="ENTITY.NAME=VALUE", help=set_help)
     prof.set_defaults(func=cmd_profile)
     show = sub.add_parser("show", help="draw a graph file as Graphviz dot or Mermaid")
-    show.add_argument("file")
-    show.add_argument("--format", choices=("dot", "mermaid"), default="dot")
+    show.add_argument("file", help=file_help)
+    show.add_argument("--format", choices=("dot", "mermaid"), default="dot",
+                      help="Graphviz dot or Mermaid flowchart (default dot)")
     show.add_argument("--signals", action="store_true", help="signal-level drawing")
-    show.add_argument("-o", "--output", help="write to this file instead of stdout")
+    show.add_argument("-o", "--output", metavar="OUT", help="write to this file instead of stdout")
     show.set_defaults(func=cmd_show)
     ents = sub.add_parser("entities", help="list the registered entity types")
     ents.add_argument("type", nargs="?", help="describe one type")

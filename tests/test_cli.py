@@ -202,6 +202,65 @@ def test_debug_checks_name_the_first_signal_that_computes_a_non_finite_value(tmp
     assert checked.returncode == 2 and "setpoint.output at tick 0: computed a value containing inf" in checked.stderr
 
 
+def test_version_prints_the_installed_version(tmp_path, capsys):
+    from importlib.metadata import version
+
+    result = dgraph_cli("--version", cwd=tmp_path)
+    assert result.returncode == 0 and result.stderr == ""
+    assert result.stdout == f"dgraph {version('dgraph')}\n"
+    with pytest.raises(SystemExit) as exit_:
+        main(["--version"])
+    assert exit_.value.code == 0 and capsys.readouterr().out == f"dgraph {version('dgraph')}\n"
+
+
+def test_version_falls_back_to_the_package_version(monkeypatch):
+    import importlib.metadata
+
+    import dgraph
+    from dgraph import cli
+
+    def not_installed(name):
+        raise importlib.metadata.PackageNotFoundError(name)
+
+    monkeypatch.setattr(importlib.metadata, "version", not_installed)
+    assert cli.version() == dgraph.__version__
+
+
+def test_python_m_dgraph_is_the_dgraph_command(tmp_path):
+    def module(*args):
+        return subprocess.run([sys.executable, "-m", "dgraph", *args], capture_output=True, text=True,
+                              cwd=tmp_path, timeout=300)
+
+    for args in (["--version"], ["check", PD], ["entities", "Gain"], ["entities", "Nope"], []):
+        by_module, by_script = module(*args), dgraph_cli(*args, cwd=tmp_path)
+        assert (by_module.returncode, by_module.stdout, by_module.stderr) == \
+               (by_script.returncode, by_script.stdout, by_script.stderr), args
+    assert module("check", PD).returncode == 0 and module("entities", "Nope").returncode == 2
+    assert module().returncode == 2 and "usage: dgraph" in module().stderr
+
+
+def test_every_argument_of_every_subcommand_has_help():
+    import argparse
+
+    from dgraph.cli import build_parser
+
+    def walk(parser, where):
+        for action in parser._actions:
+            if isinstance(action, argparse._HelpAction):
+                continue
+            name = "/".join(action.option_strings) or action.dest
+            yield f"{where} {name}", action.help
+            if isinstance(action, argparse._SubParsersAction):
+                for choice in action._choices_actions:
+                    yield f"{where} {choice.dest}", choice.help
+                for command, sub in action.choices.items():
+                    yield from walk(sub, f"{where} {command}")
+
+    found = dict(walk(build_parser(), "dgraph"))
+    assert {"dgraph run file", "dgraph profile --ticks", "dgraph check file", "dgraph --version",
+            "dgraph entities type", "dgraph show --format"} <= set(found)
+    assert [name for name, text in found.items() if not (text and text.strip())] == []
+
 
 def test_a_closed_pipe_ends_quietly_with_status_0(tmp_path):
     exe = Path(sys.executable).with_name("dgraph")
