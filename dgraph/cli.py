@@ -4,7 +4,7 @@
                     [--rerun save PATH | spawn | serve | off] [--rerun-bind ADDRESS]
                     [--npz PATH] [--debug-checks]
     dgraph check FILE
-    dgraph profile FILE [--ticks N] [--set entity.name=value ...]
+    dgraph profile FILE [--duration S | --ticks N] [--set entity.name=value ...]
     dgraph show FILE --format dot|mermaid [--signals] [-o OUT]
     dgraph entities [TYPE]
     dgraph --version
@@ -20,6 +20,7 @@ line, entity and signal, and exit with status 2.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import select
 import sys
@@ -27,12 +28,13 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from dgraph.errors import DGraphError, GraphFileError
+from dgraph.errors import DGraphError, GraphError, GraphFileError
 
 if TYPE_CHECKING:
     from dgraph.graph import Graph
 
 EXIT_ERROR = 2
+PROFILE_TICKS = 1000  # what `profile` times when neither the command line nor the file gives a length
 
 
 def version() -> str:
@@ -183,8 +185,23 @@ def cmd_profile(args: argparse.Namespace) -> int:
     graph = dgraph.load(args.file, {**quiet, **_parse_sets(args.set)})
     graph.validate()
     with graph:
-        print(graph.profile(args.ticks))
+        print(graph.profile(_profile_ticks(args, graph)))
     return 0
+
+
+def _profile_ticks(args: argparse.Namespace, graph: Graph) -> int:
+    """The ticks to profile: ``--ticks``, else ``--duration`` or the file's ``duration`` in ticks
+    (checked as ``run`` checks them), else :data:`PROFILE_TICKS`."""
+    if args.ticks is not None:
+        if args.ticks < 0:
+            raise GraphError(f"ticks must be an int >= 0, got {args.ticks!r}")
+        return args.ticks
+    duration = args.duration if args.duration is not None else graph.duration
+    if duration is None:
+        return PROFILE_TICKS
+    if not (duration >= 0 and math.isfinite(duration / graph.dt)):
+        raise GraphError(f"duration must be a finite number of seconds >= 0, got {duration!r}")
+    return round(duration / graph.dt)
 
 
 def cmd_show(args: argparse.Namespace) -> int:
@@ -245,7 +262,11 @@ def build_parser() -> argparse.ArgumentParser:
     check.set_defaults(func=cmd_check)
     prof = sub.add_parser("profile", help="time each entity over a run (per tick)")
     prof.add_argument("file", help=file_help)
-    prof.add_argument("--ticks", type=int, default=1000, metavar="N", help="number of ticks (default 1000)")
+    prof_length = prof.add_mutually_exclusive_group()
+    prof_length.add_argument("--duration", type=float, metavar="S",
+                             help="seconds of control time (default: the file's duration, "
+                                  f"else {PROFILE_TICKS} ticks)")
+    prof_length.add_argument("--ticks", type=int, metavar="N", help="number of ticks")
     prof.add_argument("--set", action="append", default=[], metavar="ENTITY.NAME=VALUE", help=set_help)
     prof.set_defaults(func=cmd_profile)
     show = sub.add_parser("show", help="draw a graph file as Graphviz dot or Mermaid")

@@ -257,7 +257,7 @@ def test_every_argument_of_every_subcommand_has_help():
                     yield from walk(sub, f"{where} {command}")
 
     found = dict(walk(build_parser(), "dgraph"))
-    assert {"dgraph run file", "dgraph profile --ticks", "dgraph check file", "dgraph --version",
+    assert {"dgraph run file", "dgraph profile --duration", "dgraph check file", "dgraph --version",
             "dgraph entities type", "dgraph show --format"} <= set(found)
     assert [name for name, text in found.items() if not (text and text.strip())] == []
 
@@ -284,6 +284,23 @@ def test_an_unwritable_stdout_is_still_an_error(tmp_path):
         result = subprocess.run([str(Path(sys.executable).with_name("dgraph")), "entities"], stdout=full,
                                 stderr=subprocess.PIPE, text=True, cwd=tmp_path, timeout=300)
     assert result.returncode == 2 and "dgraph entities: error: [Errno 28]" in result.stderr
+
+
+def test_profile_takes_a_duration_or_the_files_duration(tmp_path, capsys):
+    assert main(["profile", PD, "--duration", "0.25"]) == 0
+    assert "250 ticks" in capsys.readouterr().out
+    assert main(["profile", PD]) == 0  # the file says duration: 3.0
+    assert "3000 ticks" in capsys.readouterr().out
+    assert main(["profile", PD, "--duration", "inf"]) == 2
+    assert "finite number of seconds" in capsys.readouterr().err
+    assert main(["profile", PD, "--ticks", "-1"]) == 2
+    assert "ticks must be an int >= 0" in capsys.readouterr().err
+    no_duration = tmp_path / "no_duration.yaml"
+    no_duration.write_text(Path(PD).read_text().replace("duration: 3.0\n", ""))
+    assert main(["profile", str(no_duration)]) == 0
+    assert "1000 ticks" in capsys.readouterr().out
+    result = dgraph_cli("profile", PD, "--ticks", "5", "--duration", "1", cwd=tmp_path)
+    assert result.returncode == 2 and "not allowed with argument" in result.stderr
 
 
 def test_check_refuses_what_run_refuses_a_graph_with_nothing_to_step(tmp_path, capsys):
