@@ -1001,3 +1001,37 @@ def test_set_options_are_read_by_the_files_loader_and_their_errors_name_the_opti
         located(error, COMMAND_LINE, None, "--set k.gain")
         assert "expected a scalar float" in str(error)
     assert "expected entity.name=value" in str(refused(command_line_settings, ["k=1"]))
+
+
+DID_YOU_MEAN_BASE = """\
+name: x
+entities:
+  com: {type: Sinusoid, params: {amplitude: 1.0, frequency: 1.0}}
+  k: {type: Gain}
+"""
+
+
+@pytest.mark.parametrize(("text", "line", "key", "fragment"), [
+    (DID_YOU_MEAN_BASE + "plugs: [comm.output -> k.input]\n", 5, "plugs.0",
+     "no entity named 'comm' in the graph; did you mean 'com'?"),
+    (DID_YOU_MEAN_BASE + "plugs: [com.output -> kk.input]\n", 5, "plugs.0",
+     "no entity named 'kk' in the graph; did you mean 'k'?"),
+    (DID_YOU_MEAN_BASE + "plugs: [com.outptu -> k.input]\n", 5, "plugs.0",
+     "com (Sinusoid) has no signal 'outptu'; it has: output, velocity, acceleration; did you mean 'output'?"),
+    (DID_YOU_MEAN_BASE + "record: [com.velocty]\n", 5, "record.0", "has no signal 'velocty'; it has: output, velocity, "
+     "acceleration; did you mean 'velocity'?"),
+    (DID_YOU_MEAN_BASE + "set: {k.gian: 2.0}\n", 5, "set.k.gian", "has no signal 'gian'; it has: input, gain, output; "
+     "did you mean 'gain'?"),
+    (DID_YOU_MEAN_BASE + "set: {com.phse: 1.0}\n", 5, "set.com.phse", "did you mean 'phase'?"),
+    (DID_YOU_MEAN_BASE.replace("frequency: 1.0", "frequency: 1.0, phse: 0.0"), 3, "entities.com.params.phse",
+     "com (Sinusoid): unknown parameter(s) phse; known: amplitude, frequency, phase, offset, ramp, dt; "
+     "did you mean 'phase'?"),
+])
+def test_an_unknown_entity_signal_or_parameter_suggests_the_closest_name(text, line, key, fragment):
+    """An unknown entity in a plug, an unknown signal of a known entity (plug, record, set) and an
+    unknown parameter: located at their key, the closest name suggested; none when none is close."""
+    error = refused(loads, text)
+    located(error, "<string>", line, key)
+    assert fragment in str(error), str(error)
+    far = refused(loads, DID_YOU_MEAN_BASE + "plugs: [com.zzz -> k.input]\n")
+    assert "did you mean" not in str(far) and "has no signal 'zzz'" in str(far)

@@ -9,7 +9,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from dgraph.errors import DGraphError, GraphError, GraphFileError
+from dgraph.errors import DGraphError, GraphError, GraphFileError, ParamError
 from dgraph.files.composition import Composition, EntitySpec, Setting, compose, owner, split_settings, suggest
 from dgraph.files.paths import check_data_file, from_file
 from dgraph.files.source import At, latest, read_text
@@ -89,7 +89,7 @@ def _plug(graph: Graph, composition: Composition, entities: dict[str, EntitySpec
         try:
             graph.plug(source, target)
         except DGraphError as exc:
-            error = _refusal(exc, at, (source, target), entities)
+            error = _refusal(exc, at, (source, target), entities, hint=_did_you_mean(graph, (source, target)))
             if refused is None:
                 raise error from None
             refused.append((target, error))
@@ -99,7 +99,7 @@ def _set_constants(graph: Graph, constants: dict[str, Setting], entities: dict[s
     for key, (value, at) in constants.items():
         error = _set_constant(graph, key, value)
         if error:
-            raise _refusal(error, at, (key,), entities)
+            raise _refusal(error, at, (key,), entities, hint=_did_you_mean(graph, (key,), params=True))
 
 
 def _check_records(graph: Graph, composition: Composition, entities: dict[str, EntitySpec]) -> None:
@@ -107,16 +107,32 @@ def _check_records(graph: Graph, composition: Composition, entities: dict[str, E
         try:
             graph.signal(key)
         except DGraphError as exc:
-            raise _refusal(exc, at, (key,), entities, f"recorded signal {key!r}: ") from None
+            raise _refusal(exc, at, (key,), entities, f"recorded signal {key!r}: ",
+                           _did_you_mean(graph, (key,))) from None
 
 
 def _refusal(exc: DGraphError, at: At, keys: Iterable[str], entities: dict[str, EntitySpec],
-             prefix: str = "") -> GraphFileError:
+             prefix: str = "", hint: str = "") -> GraphFileError:
     """The error of a plug, setting or record that the graph refused, at its own place, or at
-    the definition of an entity it names if a nearer file (re)defined that entity."""
+    the definition of an entity it names if a nearer file (re)defined that entity; ``hint``
+    follows the refusal (``; did you mean 'x'?``)."""
     blame = latest(at, *(entities[owner(key)].at for key in keys if owner(key) in entities))
     note = "" if blame is at else f" (from {at.where()})"
-    return blame.error(f"{prefix}{exc}{note}", exc)
+    return blame.error(f"{prefix}{exc}{hint}{note}", exc)
+
+
+def _did_you_mean(graph: Graph, keys: Iterable[str], params: bool = False) -> str:
+    """``; did you mean 'x'?`` for the first of the ``entity.signal`` keys that names no entity
+    of ``graph`` (the closest entity) or no signal of its entity (the closest signal, or
+    parameter with ``params``, as a setting may name either); nothing if none is close."""
+    for key in keys:
+        name, _, signal = key.partition(".")
+        if name not in graph:
+            return suggest(name, graph.entities)
+        entity = graph.entity(name)
+        if signal not in entity.ports:
+            return suggest(signal, [*entity.ports, *(entity._param_decls if params else ())])
+    return ""
 
 
 def _check_settings(settings: dict[str, Setting], entities: dict[str, EntitySpec], file: str) -> None:
@@ -166,6 +182,10 @@ def _params(name: str, spec: EntitySpec, decls: dict[str, Param], settings: dict
     checked to be a regular file of a bounded size); and where a refusal of the constructor is
     reported (the nearest file that had a say)."""
     given = {key: (value, spec.where("params", key)) for key, value in spec.params.items()}
+    for key, (_, at) in given.items():
+        if key not in decls:
+            raise at.error(f"{name} ({spec.type}): unknown parameter(s) {key}; known: "
+                           f"{', '.join(decls) or 'none'}{suggest(key, decls)}", ParamError("", entity=name))
     extra = dict(settings)
     if robot is not None and "model" in decls and "model" not in given:
         extra.setdefault("model", robot)
