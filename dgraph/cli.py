@@ -50,21 +50,6 @@ def version() -> str:
         return str(getattr(dgraph, "__version__", "unknown"))
 
 
-def _parse_sets(items: list[str]) -> dict[str, Any]:
-    from dgraph.files import parse
-
-    out: dict[str, Any] = {}
-    for item in items:
-        key, eq, text = item.partition("=")
-        if not eq or key.count(".") != 1:
-            raise GraphFileError(f"--set {item!r}: expected entity.name=value", file="<command line>")
-        data = parse(f"entities: {{}}\nset: {{x.v: {text}}}", "<command line>") if text else {}
-        if not data:
-            raise GraphFileError(f"--set {item!r}: missing value", file="<command line>")
-        out[key.strip()] = data["set"]["x.v"]
-    return out
-
-
 def _recorder_names(path: str, types: tuple[str, ...] = ("Recorder",)) -> tuple[list[str], str]:
     """The entities of the given types (recorders) a graph file declares, and its file-safe name."""
     from dgraph.entities.recording.rerun_stream import safe_file_stem
@@ -119,8 +104,9 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace) -> int:
     import dgraph
+    from dgraph.files import command_line_settings
 
-    overrides = {**_recorder_overrides(args.file, args), **_parse_sets(args.set)}
+    overrides = {**_recorder_overrides(args.file, args), **command_line_settings(args.set)}
     graph = dgraph.load(args.file, overrides)
     graph.validate()
     if args.debug_checks:
@@ -180,9 +166,10 @@ def cmd_check(args: argparse.Namespace) -> int:
 def cmd_profile(args: argparse.Namespace) -> int:
     """Run a graph file with timing on and print where each tick's time goes (no recording)."""
     import dgraph
+    from dgraph.files import command_line_settings
 
     quiet = {f"{name}.rerun": "off" for name in _recorder_names(args.file, ("Recorder", "RobotView"))[0]}
-    graph = dgraph.load(args.file, {**quiet, **_parse_sets(args.set)})
+    graph = dgraph.load(args.file, {**quiet, **command_line_settings(args.set)})
     graph.validate()
     with graph:
         print(graph.profile(_profile_ticks(args, graph)))

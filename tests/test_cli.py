@@ -312,3 +312,13 @@ def test_check_refuses_what_run_refuses_a_graph_with_nothing_to_step(tmp_path, c
     out = capsys.readouterr().out
     assert "1 problem(s)" in out and "OK" not in out
     assert f"{stateless}: graph 'stateless' has no device or stateful entity to step" in out
+
+
+def test_a_set_option_error_names_the_option_not_a_line_of_a_made_up_document(tmp_path):
+    result = dgraph_cli("run", PD, "--ticks", "2", "--rerun", "off", "--set", "setpoint.value=[1,", cwd=tmp_path)
+    assert result.returncode == 2
+    assert "<command line> [--set setpoint.value]: '[1,': invalid YAML" in result.stderr, result.stderr
+    assert "<command line>:" not in result.stderr, result.stderr  # no line number of a synthetic text
+    ok = dgraph_cli("run", PD, "--ticks", "2", "--rerun", "off", "-q", "--set", "setpoint.value=[2.5e1, 0.0]",
+                    cwd=tmp_path)
+    assert ok.returncode == 0, ok.stderr  # 2.5e1 is a number, as YAML 1.2 reads it
