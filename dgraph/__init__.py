@@ -1,12 +1,25 @@
 """dgraph: lazily cached, time-stamped signal graphs for whole-body robot control.
 
-The public API::
+A graph of entities whose outputs are plugged into inputs; a stateful entity (a device, an
+integrator) advances one tick at a time and pulls what it needs, which computes exactly what is
+stale (``tests/test_package_doc.py`` runs this example)::
 
-    import dgraph as dg
-    g = dg.Graph(dt=0.001)
-    k = g.add(dg.entities.Gain("k", size=3))
-    g.plug("ref.output", "k.u")
-    g.run(duration=1.0)
+    >>> import dgraph as dg
+    >>> from dgraph.entities.discrete import Integrator
+    >>> from dgraph.entities.operators import Constant, Gain
+    >>> g = dg.Graph(dt=0.01, name="example")
+    >>> rate, twice, position = g.add(Constant("rate", value=[1.0, 2.0]), Gain("twice", size=2),
+    ...                               Integrator("position", size=2))
+    >>> twice.gain.set(2.0)
+    >>> g.plug("rate.output", "twice.input")
+    >>> g.plug("twice.output", "position.input")
+    >>> g.run(ticks=100)                   # 1 s: position = 2 rate t
+    >>> position.output(g.t)
+    array([2., 4.])
+    >>> twice.output.count                 # computed once: nothing it reads has changed since
+    1
+
+Graph files (``dg.load``), the ``dgraph`` command and the TALOS graphs are in the README.
 """
 
 from dgraph.device import Device, Hooks
@@ -25,6 +38,7 @@ from dgraph.errors import (
     SpecError,
     UnpluggedInputError,
 )
+from dgraph.faults import Fault, FaultLog
 from dgraph.graph import Graph, plug
 from dgraph.params import Param
 from dgraph.registry import entity_types, get_type, register
@@ -53,6 +67,8 @@ __all__ = [
     "DependencyError",
     "Device",
     "Entity",
+    "Fault",
+    "FaultLog",
     "Graph",
     "GraphError",
     "GraphFileError",
