@@ -18,6 +18,7 @@ instance binds its own copies of the declared ports; shapes may refer to paramet
 
 from __future__ import annotations
 
+import inspect
 import re
 from collections.abc import Callable
 from typing import Any, ClassVar, TypeVar
@@ -36,6 +37,33 @@ def command(fn: F) -> F:
     """Mark an entity method as a command: a runtime operation listed with its docstring."""
     fn._dg_command = True  # type: ignore[attr-defined]
     return fn
+
+
+_ANNOTATIONS: dict[str, Any] = {
+    "float": float, "int": int, "bool": bool, "str": str, "path": str, "vector": "Sequence[float]",
+    "str_list": list[str], "int_list": list[int], "object": Any,
+}
+"""The type shown in an entity's signature for each parameter kind."""
+
+
+def _generic_init(cls: type) -> bool:
+    """True if ``cls`` is built by ``Entity.__init__(name, **params)`` (no constructor of its own
+    with other arguments)."""
+    init = cls.__init__
+    parameters = list(inspect.signature(init).parameters.values())[1:]  # without self
+    return [(p.name, p.kind) for p in parameters] == [("name", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+                                                      ("params", inspect.Parameter.VAR_KEYWORD)]
+
+
+def _signature(params: dict[str, Param]) -> inspect.Signature:
+    """``(name, *, param=default, ...)``: the name, then every parameter as a keyword argument
+    with its type and default (a required one has none)."""
+    parameters = [inspect.Parameter("name", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation=str)]
+    for pname, decl in params.items():
+        default = inspect.Parameter.empty if decl.default is REQUIRED else decl.default
+        parameters.append(inspect.Parameter(pname, inspect.Parameter.KEYWORD_ONLY, default=default,
+                                            annotation=_ANNOTATIONS.get(decl.kind, Any)))
+    return inspect.Signature(parameters)
 
 
 class Entity:
@@ -92,6 +120,9 @@ class Entity:
         cls._port_templates = ports
         cls._param_decls = params
         cls._command_names = tuple(commands)
+        # what inspect.signature, help() and notebooks show: the parameters (None: a constructor of
+        # its own, whose signature inspect reads; not one inherited from a base class)
+        cls.__signature__ = _signature(params) if _generic_init(cls) else None
 
     def __init__(self, name: str, **params: Any):
         if not isinstance(name, str) or not NAME_RE.match(name):

@@ -129,3 +129,27 @@ def test_constant_problem_refuses_a_constant_where_it_is_set():
     with pytest.raises(dg.SpecError, match=r"^e\.pair: expected a scalar or 2 values, got \(3,\)$") as caught:
         e.pair.set([1.0, 2.0, 3.0])
     assert (caught.value.entity, caught.value.signal) == ("e", "pair") and e.pair.value.tolist() == [1.0, 2.0]
+
+
+def test_an_entity_signature_shows_its_parameters_as_keyword_arguments():
+    """inspect.signature (help(), notebooks, IDEs that ask the runtime) sees every parameter."""
+    import inspect
+
+    class Spring(dg.Entity):
+        stiffness = dg.Param(kind="float", doc="N/m")
+        rest = dg.Param([0.0, 0.0], kind="vector")
+        label = dg.Param("spring", kind="str")
+
+    class Custom(Spring):
+        def __init__(self, name, extra, **params):
+            super().__init__(name, **params)
+
+    signature = inspect.signature(Spring)
+    assert list(signature.parameters) == ["name", "stiffness", "rest", "label"]
+    stiffness, label = signature.parameters["stiffness"], signature.parameters["label"]
+    assert stiffness.kind is inspect.Parameter.KEYWORD_ONLY and stiffness.default is inspect.Parameter.empty
+    assert stiffness.annotation is float and label.default == "spring" and label.annotation is str
+    signature.bind("s", stiffness=1.0)  # what the constructor takes, it binds
+    with pytest.raises(TypeError):
+        signature.bind("s", stifness=1.0)
+    assert list(inspect.signature(Custom).parameters) == ["name", "extra", "params"]  # its own
