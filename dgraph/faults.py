@@ -43,16 +43,22 @@ class Fault:
 class FaultLog:
     """The faults of a graph's run: staged during a tick, kept when it commits.
 
-    ``faults`` (the first :data:`KEPT_FAULTS` kept faults, in order), ``degraded_ticks`` (how many
-    committed ticks had a fault), ``counts`` (kept faults per ``(signal, cause)``),
+    ``faults`` (the first :data:`KEPT_FAULTS` kept faults, in order), ``degraded`` (every
+    committed tick that had a fault, in order), ``degraded_ticks`` (how many), ``counts``
+    (kept faults per ``(signal, cause)``),
     :meth:`staged` (the faults reported so far at a tick that has not committed yet).
     """
 
     def __init__(self) -> None:
         self.faults: list[Fault] = []
-        self.degraded_ticks = 0
+        self.degraded: list[int] = []
         self.counts: Counter[tuple[str, str]] = Counter()
         self._staged: list[Fault] = []
+
+    @property
+    def degraded_ticks(self) -> int:
+        """How many committed ticks had a fault."""
+        return len(self.degraded)
 
     def report(self, tick: int, signal: str, cause: str, action: str, detail: str = "") -> None:
         """Stage a fault of ``tick`` (the same fault reported again at the same tick, by a
@@ -78,14 +84,14 @@ class FaultLog:
         self._staged = []
         if not mine:
             return
-        self.degraded_ticks += 1
+        self.degraded.append(tick)
         for fault in mine:
             self.counts[fault.signal, fault.cause] += 1
         self.faults.extend(mine[:max(0, KEPT_FAULTS - len(self.faults))])
 
     def clear(self) -> None:
         """Forget everything (a reset)."""
-        self.faults, self.degraded_ticks, self._staged = [], 0, []
+        self.faults, self.degraded, self._staged = [], [], []
         self.counts.clear()
 
     def summary(self, limit: int = 5) -> str:

@@ -13,7 +13,6 @@ import dgraph as dg
 from dgraph.entities.recording import Recorder, read_series
 from dgraph.entities.recording.recorder import component_names
 from dgraph.entities.references import Sinusoid
-from dgraph.faults import Fault
 from tests.conftest import Scale, Ticker
 
 
@@ -272,17 +271,31 @@ def test_the_rrd_has_the_faults_text_log(tmp_path):
     assert ticks.tolist() == [0, 1, 2, 3, 4] and values.ravel().tolist() == [0.0, 1.0, 0.0, 3.0, 4.0]
 
 
-def test_a_recorder_keeps_at_most_kept_faults_and_counts_every_degraded_tick(tmp_path, monkeypatch):
+class Dead(dg.Entity):
+    """y = u, with a fault at every tick (a sensor dead for good)."""
+
+    u = dg.Input(shape=())
+
+    @dg.output(shape=(), depends=("u", "t"))
+    def y(self, t):
+        self.report_fault(t, "y", "NaN", "replaced by 0")
+        return 0.0
+
+
+def test_a_recording_keeps_what_the_fault_log_keeps_and_marks_every_degraded_tick(tmp_path, monkeypatch):
     """A sensor dead for minutes must not fill the memory or the viewer: past KEPT_FAULTS the
     faults are no longer kept, the degraded ticks still are."""
-    import dgraph.entities.recording.recorder as recorder_module
+    import dgraph.faults as faults_module
 
-    monkeypatch.setattr(recorder_module, "KEPT_FAULTS", 2)
-    g = faulty_graph(tmp_path)
-    rec = g["rec"]
-    for t in range(4):  # four degraded ticks, one fault each
-        rec._keep_faults([Fault(t, "s.x", "NaN", "kept")])
-    assert [f.tick for f in rec._faults] == [0, 1] and rec._degraded == [0, 1, 2, 3]
+    monkeypatch.setattr(faults_module, "KEPT_FAULTS", 2)
+    g = dg.Graph(dt=0.01, name="dead")
+    g.add(Ticker("dev"), Dead("dead"))
+    g.plug("dev.x", "dead.u")
+    g.add(Recorder("rec", signals=["dead.y"], rerun="off"))
+    g.run(ticks=4)
+    data = g["rec"].data()
+    assert data["fault_tick"].tolist() == [0, 1] and data["degraded"].tolist() == [True] * 4
+    assert g.fault_log.degraded == [0, 1, 2, 3] and g.fault_log.counts == {("dead.y", "NaN"): 4}
 
 
 def test_two_recorders_of_one_recording_log_each_fault_once(tmp_path):

@@ -10,7 +10,6 @@ import numpy as np
 import dgraph as dg
 from dgraph.entities.recording.columns import Table
 from dgraph.entities.recording.rerun_stream import RerunStream, default_flush_every, open_stream_for
-from dgraph.faults import KEPT_FAULTS, Fault
 from dgraph.signals.signal import Signal
 
 
@@ -37,9 +36,10 @@ class Recorder(dg.Entity):
 
     The faults of the recorded ticks (:mod:`dgraph.faults`: what bad data a tick survived and
     what replaced it) are recorded too: in the ``.npz``, ``degraded`` (per recorded tick) and
-    one entry per fault (the first ``KEPT_FAULTS``) in ``fault_tick``, ``fault_signal``,
+    one entry per fault (those the graph's fault log keeps) in ``fault_tick``, ``fault_signal``,
     ``fault_cause``, ``fault_action`` and ``fault_detail``; in Rerun, a warning on the ``faults``
-    text log at the fault's tick, sent with the series (one batch per flush).
+    text log at the fault's tick, sent with the series (one batch per flush). All are read from
+    the graph's log, which keeps a tick's faults once the tick commits.
 
     Parameters: ``signals`` (``entity.signal`` names), ``rerun`` (``save``, the default: an .rrd
     file, ``rrd_path`` or ``out/<graph name>.rrd``; ``spawn``: a viewer; ``serve``: a web viewer
@@ -70,10 +70,7 @@ class Recorder(dg.Entity):
         self._sources: list[Signal] | None = None
         self._rows = Table()  # the tick, then one column per signal
         self._row_written = False  # at this tick's observe, kept if the tick commits
-        self._faults: list[Fault] = []  # of the kept rows
-        self._tick_faults: list[Fault] = []  # of this tick's row, kept with it
-        self._degraded: list[int] = []  # the recorded ticks with a fault
-        self._unsent_faults: list[Fault] = []  # kept, not yet sent to Rerun
+        self._faults_sent = 0  # how many of the graph's kept faults went to Rerun
         self._stream: RerunStream | None = None
         self._plotted: list[tuple[int, str, list[str]]] | None = None
         self._pending = 0
@@ -114,7 +111,6 @@ class Recorder(dg.Entity):
         except (ValueError, TypeError) as exc:
             raise self._misfit(row, t, exc) from exc
         self._row_written = True
-        self._tick_faults = self.graph.fault_log.staged(t)
 
     def _misfit(self, row: tuple[Any, ...], t: int, cause: Exception) -> dg.DGraphError:
         """The error naming the recorded signal whose value at ``t`` does not fit its column."""
@@ -130,28 +126,16 @@ class Recorder(dg.Entity):
         if self._row_written:
             self._row_written = False
             self._rows.keep()
-            if self._tick_faults:
-                self._keep_faults(self._tick_faults)
-                self._tick_faults = []
         if self._stream is not None:
             self._pending += 1
             if self._pending >= self.flush_every:
                 self._send()
 
-    def _keep_faults(self, faults: list[Fault]) -> None:
-        """Keep a committed tick's faults: the first :data:`~dgraph.faults.KEPT_FAULTS` in full
-        (a sensor dead for minutes would fill the memory and the viewer), each tick counted in
-        ``degraded``; they go to Rerun with the next batch of series."""
-        self._degraded.append(faults[0].tick)
-        room = KEPT_FAULTS - len(self._faults)
-        if room > 0:
-            self._faults += faults[:room]
-            self._unsent_faults += faults[:room]
-
     def _send(self) -> None:
-        if self._unsent_faults:  # one batch for all the faults since the last send
-            self._stream.send_faults(self._unsent_faults)
-            self._unsent_faults = []
+        faults = self.graph.fault_log.faults
+        if len(faults) > self._faults_sent:  # one batch for all the faults kept since the last send
+            self._stream.send_faults(faults[self._faults_sent:])
+            self._faults_sent = len(faults)
         n = self._pending
         self._pending = 0
         if n == 0 or self._stream is None:
@@ -192,10 +176,13 @@ class Recorder(dg.Entity):
         out["time"] = out["tick"] * (self.graph.dt if self.graph is not None else 1.0)
         for i, name in enumerate(self.signals, start=1):
             out[name] = self._rows.column(i).copy()
-        out["degraded"] = np.isin(out["tick"], self._degraded)
-        out["fault_tick"] = np.array([f.tick for f in self._faults], dtype=np.int64)
+        log = self.graph.fault_log if self.graph is not None else None
+        recorded = set(out["tick"].tolist())
+        faults = [f for f in log.faults if f.tick in recorded] if log is not None else []
+        out["degraded"] = np.isin(out["tick"], log.degraded if log is not None else [])
+        out["fault_tick"] = np.array([f.tick for f in faults], dtype=np.int64)
         for field in ("signal", "cause", "action", "detail"):
-            out[f"fault_{field}"] = np.array([getattr(f, field) for f in self._faults], dtype=str)
+            out[f"fault_{field}"] = np.array([getattr(f, field) for f in faults], dtype=str)
         return out
 
     def close(self) -> None:
