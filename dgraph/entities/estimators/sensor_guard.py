@@ -148,12 +148,6 @@ class SensorGuard:
         self._next: tuple[np.ndarray, ...] | None = None  # trusted, raw, replaced, same, unknown, doubtful
         self._deviation, self._within = np.empty(n), np.empty(n, dtype=bool)
 
-    def prediction(self) -> np.ndarray | None:
-        """Where each element should be at this tick (None before the first reading): the
-        trusted value of the last one, a position moved by ``dt`` times its trusted rate;
-        computed once, when the last tick committed."""
-        return self._predicted
-
     def _predict(self, trusted: np.ndarray, doubtful: np.ndarray | None) -> np.ndarray:
         """``trusted``, each position moved by ``dt`` times its rate; a rate that is itself a
         substitute (``doubtful``: replaced, frozen or stale) counts as 0, and the prediction then
