@@ -56,7 +56,7 @@ Units: SI (m, N, s, rad); gains in 1/s^2 (kp) and 1/s (kd); ``kd: null`` means 2
                                     model (mj_saveModel; needs the same mujoco version), q0: start
                                     configuration (Pinocchio order), qpos_index, qvel_index,
                                     ctrl_index, free_qpos, free_dof: the maps of dgraph's
-                                    sim.conventions.JointMap}
+                                    dgraph_sim.conventions.JointMap}
 
 Output keys: versions{tsid,libtsid,pinocchio,eigenpy,numpy,python}, solver, threads_env (the
 OMP/OpenBLAS/MKL thread variables it ran with), model{nq,nv,na,

@@ -24,7 +24,7 @@ Ticks:
   plus dgraph's signal overhead), without the simulator (torque limits in the QP when one binds).
 - **TSID tick**: ``bench/peer_tsid.py`` in ``.venv-tsid``: ``computeProblemData`` + ``solve``;
   eiquadprog (HQuadProgFast). Measured in the same MuJoCo closed loop as ours (the same model
-  of TALOS in the flat scene, saved by ``sim.model`` for the peer: its torques drive MuJoCo, its
+  of TALOS in the flat scene, saved by ``dgraph_sim.model`` for the peer: its torques drive MuJoCo, its
   state is read back from it), the ratio of the acceptance; and, for information, in TSID's own
   loop (semi-implicit Euler, no simulator between its ticks), where it runs a few per cent
   faster (the simulator's step between two ticks leaves the caches colder for the next one).
@@ -241,7 +241,7 @@ def simulator_spec(directory: Path) -> dict[str, object]:
     ``directory`` as a binary model, its start configuration and the joint maps."""
     import mujoco
 
-    from sim.model import load
+    from dgraph_sim.model import load
 
     sim = load("talos")
     path = directory / "talos.mjb"

@@ -20,7 +20,7 @@ from dgraph.entities.references import Sinusoid
 from dgraph.entities.robot import RobotModel
 from dgraph.entities.solvers import InverseDynamicsSolver
 from dgraph.entities.tasks import Task
-from sim.device import MujocoDevice
+from dgraph_sim.device import MujocoDevice
 
 ROBOT = "talos"  # the robot model, named once: every entity that loads a model takes this one
 HALF_SITTING_COM = [-0.0031639, 0.0012374, 0.8766814]

@@ -1,4 +1,4 @@
-"""Cost of the MuJoCo device per tick, on top of MuJoCo's own step: ``python -m sim.bench``.
+"""Cost of the MuJoCo device per tick, on top of MuJoCo's own step: ``python -m dgraph_sim.bench``.
 
 TALOS stands in position mode (gravity feed-forward). For each tick, interleaved, it times the
 device's ``prepare_state`` + ``commit_state`` and, from the same MuJoCo state, the bare
@@ -18,7 +18,7 @@ import mujoco
 import numpy as np
 
 import dgraph as dg
-from sim.device import MujocoDevice
+from dgraph_sim.device import MujocoDevice
 
 _STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 

@@ -1,4 +1,4 @@
-"""The MuJoCo device entity: a TALOS (or another robot of :mod:`sim.robots`) simulated by MuJoCo.
+"""The MuJoCo device entity: a TALOS (or another robot of :mod:`dgraph_sim.robots`) simulated by MuJoCo.
 
 One tick ``t -> t + 1`` (``prepare_state(t)``): read ``control(t)`` (and the wrench inputs),
 compute the joint torques, save the MuJoCo integration state (``mj_getState``, without the applied
@@ -15,7 +15,7 @@ If a tick fails after MuJoCo stepped (another entity raised before the commit, o
 detected a fall or a divergence), the next ``prepare_state`` restores the saved state first, so a
 resumed run is identical to an uninterrupted one.
 
-All states use Pinocchio's conventions (see :mod:`sim.conventions`). Acceleration-stage
+All states use Pinocchio's conventions (see :mod:`dgraph_sim.conventions`). Acceleration-stage
 quantities (``imu_linear_acceleration``, the force/torque sensors, ``joint_torque``,
 ``contact_force_total``) stamped ``t + 1`` are those of the step ``t -> t + 1`` (computed at ``t``
 with ``control(t)``, as a sensor sampled at the end of the period would see them); at tick 0 they
@@ -32,10 +32,10 @@ import mujoco
 import numpy as np
 
 import dgraph as dg
-from sim.disturbances import Removals
-from sim.model import SimModel, load
-from sim.robots import ROBOTS
-from sim.scenes import SCENES
+from dgraph_sim.disturbances import Removals
+from dgraph_sim.model import SimModel, load
+from dgraph_sim.robots import ROBOTS
+from dgraph_sim.scenes import SCENES
 
 _STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION) & ~int(mujoco.mjtState.mjSTATE_QFRC_APPLIED
                                                           | mujoco.mjtState.mjSTATE_XFRC_APPLIED)
@@ -102,8 +102,8 @@ class MujocoDevice(dg.Device):
     the IMU is at ``imu_link`` (on ``torso_2_link``).
     """
 
-    model = dg.Param("talos", kind="str", choices=tuple(ROBOTS), doc="robot (sim.robots)")
-    scene = dg.Param("flat", kind="str", choices=tuple(SCENES), doc="scene (sim.scenes)")
+    model = dg.Param("talos", kind="str", choices=tuple(ROBOTS), doc="robot (dgraph_sim.robots)")
+    scene = dg.Param("flat", kind="str", choices=tuple(SCENES), doc="scene (dgraph_sim.scenes)")
     collisions = dg.Param("all", kind="str", choices=("feet", "all"),
                           doc="robot geoms touching the scene: every collision mesh (never each other), or soles only")
     control_mode = dg.Param("torque", kind="str", choices=("torque", "position"), doc="what control commands")

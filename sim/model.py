@@ -13,9 +13,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from sim.conventions import JointMap
-from sim.robots import ROBOTS, RobotInfo
-from sim.scenes import add_scene
+from dgraph_sim.conventions import JointMap
+from dgraph_sim.robots import ROBOTS, RobotInfo
+from dgraph_sim.scenes import add_scene
 
 
 @dataclass(frozen=True)

@@ -59,7 +59,7 @@ class Scene:
             yaw: float = 0.0, rgba: Sequence[float] = (0.6, 0.45, 0.3, 1.0)) -> mujoco.MjsGeom:
         """A box of full ``size`` (x, y, z) centred at ``pos``; ``free=True`` makes it a movable block,
         ``mocap=True`` a static block that a simulation can move or remove (body ``name``,
-        :mod:`sim.disturbances`)."""
+        :mod:`dgraph_sim.disturbances`)."""
         half = [s / 2.0 for s in size]
         quat = _quat_from_rpy(roll, pitch, yaw)
         if mocap:
@@ -171,7 +171,7 @@ therefore measures the push."""
 
 def push(scene: Scene) -> None:
     """TALOS's left hand holds a 0.14 m tool (a cylinder along the fingers) above a table-height block
-    (0.2 x 0.2 x 0.58 m, a mocap body named ``block`` that :mod:`sim.disturbances` can remove); the
+    (0.2 x 0.2 x 0.58 m, a mocap body named ``block`` that :mod:`dgraph_sim.disturbances` can remove); the
     block's top is 2.2 cm under the tool tip at half-sitting (thesis §5.4.1)."""
     scene.floor(friction=1.0)
     scene.tool("gripper_left_base_link", start=(0.0, 0.0, -0.06), end=LEFT_TOOL_TIP, radius=0.015)

@@ -215,9 +215,9 @@ def test_a_reversed_admittance_makes_the_pendulum_diverge():
 
 
 def test_talos_standing_in_mujoco_has_its_zmp_under_its_com():
-    """The ankle sensors' frames and sign (sim.device): TALOS held by stiff joint servos at
+    """The ankle sensors' frames and sign (dgraph_sim.device): TALOS held by stiff joint servos at
     half-sitting settles with its measured ZMP under its CoM, carrying its weight."""
-    from sim.device import MujocoDevice
+    from dgraph_sim.device import MujocoDevice
 
     graph = dg.Graph(dt=0.001)
     grippers = [21, 29]

@@ -2,7 +2,7 @@
 frozen value and a jump, for one tick and for 100 ticks, with value checks on and off.
 
 Per sensor and setting, one run of ``graphs/talos_standing.yaml`` with the eight faults in
-sequence (a :class:`sim.faults.SensorFault` between the device and the estimator, each window
+sequence (a :class:`dgraph_sim.faults.SensorFault` between the device and the estimator, each window
 0.4 s after the last). What must hold: the loop never stops; MuJoCo never receives a non-finite
 torque (the device never had to replace one either); TALOS stays up, its base height within 2 cm
 of standing (6 cm for the accelerometer: its 100-tick offset of 50 m/s2 is in range and is not
@@ -26,7 +26,7 @@ import pinocchio as pin
 import pytest
 
 import dgraph as dg
-from sim.faults import SensorFault
+from dgraph_sim.faults import SensorFault
 
 ROOT = Path(__file__).resolve().parents[2]
 START, SPACING = 0.3, 0.4

@@ -18,9 +18,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from sim.conventions import JointMap, quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
-from sim.model import load
-from sim.robots import SOLE_HALF_SIZE
+from dgraph_sim.conventions import JointMap, quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
+from dgraph_sim.model import load
+from dgraph_sim.robots import SOLE_HALF_SIZE
 
 
 @pytest.fixture(scope="module")
@@ -110,7 +110,7 @@ def test_model_matches_the_pinocchio_model(talos):
     hinge = jm.qvel_joints
     np.testing.assert_array_equal(m.dof_armature[hinge], model.armature[6:])
     assert sorted(set(model.armature[6:])) == [0.0, 0.1]  # grippers 0, others rotor inertia * gear² = 0.1
-    assert not m.dof_damping.any() and not m.dof_frictionloss.any()  # RNEA ignores them (see sim.robots)
+    assert not m.dof_damping.any() and not m.dof_frictionloss.any()  # RNEA ignores them (see dgraph_sim.robots)
 
 
 def test_sensor_sites_sit_at_their_pinocchio_frames(talos):

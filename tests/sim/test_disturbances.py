@@ -10,9 +10,9 @@ import pytest
 import dgraph as dg
 from dgraph.entities.estimators import ExternalForce
 from dgraph.entities.robot import RobotModel
-from sim.device import MujocoDevice
-from sim.disturbances import AWAY, Removals
-from sim.scenes import LEFT_TOOL_TIP, PUSH_BLOCK_TOP, Scene
+from dgraph_sim.device import MujocoDevice
+from dgraph_sim.disturbances import AWAY, Removals
+from dgraph_sim.scenes import LEFT_TOOL_TIP, PUSH_BLOCK_TOP, Scene
 
 TOOL = {"left_tool_tip": {"parent": "gripper_left_base_link", "translation": list(LEFT_TOOL_TIP)}}
 REMOVAL_TICK = 300

@@ -8,7 +8,7 @@ import pinocchio as pin
 import pytest
 
 import dgraph as dg
-from sim.device import MujocoDevice
+from dgraph_sim.device import MujocoDevice
 
 G = 9.81
 

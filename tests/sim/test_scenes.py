@@ -7,7 +7,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from sim.scenes import SCENES, Scene, add_scene
+from dgraph_sim.scenes import SCENES, Scene, add_scene
 
 
 def test_a_free_block_falls_and_rests_on_the_floor():

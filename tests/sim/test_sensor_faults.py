@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import dgraph as dg
-from sim.faults import KINDS, SensorFault
+from dgraph_sim.faults import KINDS, SensorFault
 from tests.conftest import Ticker
 
 DT = 0.01

@@ -19,7 +19,7 @@ from dgraph.entities.estimators import ExternalForce
 from dgraph.entities.estimators.external_force import payload_mass
 from dgraph.entities.robot import RobotModel, RobotState, load_model
 from dgraph.entities.robot.robot_state import DataFields
-from sim.device import MujocoDevice
+from dgraph_sim.device import MujocoDevice
 
 HAND_MASS = 1.384  # URDF mass beyond the wrist sensor (graphs/talos_push_tank.yaml)
 PUSH = np.array([12.0, -8.0, 15.0])  # world force on the gripper (up and sideways: the tool stays off the block)

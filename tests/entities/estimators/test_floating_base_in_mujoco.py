@@ -7,7 +7,7 @@ import pinocchio as pin
 
 import dgraph as dg
 from dgraph.entities.estimators import FloatingBaseEstimator
-from sim.device import MujocoDevice
+from dgraph_sim.device import MujocoDevice
 
 SENSORS = ("imu_orientation", "imu_angular_velocity", "imu_linear_acceleration", "encoder_position",
            "encoder_velocity", "ft_left_ankle", "ft_right_ankle")
