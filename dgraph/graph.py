@@ -258,6 +258,12 @@ class Graph:
         from dgraph.export import to_mermaid
         return to_mermaid(self, signals)
 
+    def _repr_markdown_(self) -> str:
+        """Jupyter's rich display: a summary, the Mermaid drawing and the entities
+        (:func:`dgraph.display.to_markdown`); text only, nothing is evaluated."""
+        from dgraph.display import to_markdown
+        return to_markdown(self)
+
     def explain(self, key: str | Signal) -> str:
         """Why ``entity.signal`` would or would not recompute at the next tick."""
         from dgraph.introspect import explain
