@@ -26,16 +26,19 @@ from __future__ import annotations
 
 import copy
 import math
-from pathlib import Path
+import os
+from fractions import Fraction
 
 import mujoco
 import numpy as np
 
 import dgraph as dg
+from dgraph_sim.camera import RobotCamera
 from dgraph_sim.disturbances import Removals
 from dgraph_sim.model import SimModel, load
 from dgraph_sim.robots import ROBOTS
 from dgraph_sim.scenes import SCENES
+from dgraph_sim.video import VideoError, VideoWriter, check_video, log_video
 
 _STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION) & ~int(mujoco.mjtState.mjSTATE_QFRC_APPLIED
                                                           | mujoco.mjtState.mjSTATE_XFRC_APPLIED)
@@ -119,10 +122,13 @@ class MujocoDevice(dg.Device):
     remove_times = dg.Param([], kind="vector", doc="time (s) at which each of remove_bodies is removed")
     fall_height = dg.Param(0.6, kind="float", doc="base height (m) under which fallen is true")
     stop_on_fall = dg.Param(False, kind="bool", doc="raise a DGraphError when the robot falls")
-    video_path = dg.Param(None, kind="str", doc="record a video (.gif, .webp or .png) written at close")
+    video_path = dg.Param(None, kind="str", doc="record a video (.mp4 H.264, .gif, .webp or .png), written at "
+                          "close; an .mp4 is also logged to the graph's Rerun recording")
     video_fps = dg.Param(25.0, kind="float", minimum=0.1, maximum=1000.0, doc="video frame rate")
     video_size = dg.Param([320, 240], kind="int_list", doc="video width and height in pixels")
-    video_camera = dg.Param("track", kind="str", choices=("track", "front"), doc="video camera: side or front view")
+    video_camera = dg.Param("robot", kind="str", choices=("robot", "track", "front"),
+                            doc="video camera: framing the whole robot (following it past a dead zone), "
+                            "side view tracking its CoM, or fixed in front of the origin")
 
     control = dg.Input(shape=_na, doc="joint torques (torque mode) or position targets (position mode)")
     # declared per instance (their zero default is sized by the robot): in position mode only,
@@ -251,13 +257,16 @@ class MujocoDevice(dg.Device):
         self._fallen_staged = self._fault_staged = False
         self._held = self._held_next = None
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
-        self._frames: list[np.ndarray] = []
+        self._camera = RobotCamera(m, self.sim.robot_bodies, jm.base_body)
+        self._video: VideoWriter | None = None
+        self._video_streams: list = []  # the graph's Rerun streams the .mp4 is logged to (shares held)
         self._next_frame = 0
         if self.video_path is not None:
-            if Path(self.video_path).suffix.lower() not in (".gif", ".webp", ".png"):
-                raise dg.ParamError(f"{self.name}: video_path must end in .gif, .webp or .png (written with "
-                                    f"Pillow; no video encoder is installed), got {self.video_path!r}",
-                                    entity=self.name)
+            try:
+                check_video(self.video_path, self.video_size)
+            except VideoError as exc:
+                raise dg.ParamError(f"{self.name}: video_path: {exc}", entity=self.name) from None
+            self._renderer(*self.video_size, purpose="video_path")  # no OpenGL: refused now, not at the first frame
             self.after.add(self._record_frame)
 
     def reset(self) -> None:
@@ -452,57 +461,92 @@ class MujocoDevice(dg.Device):
         return total
 
     # -- rendering --------------------------------------------------------------------------
-    def render(self, width: int = 320, height: int = 240, camera: str = "track") -> np.ndarray:
-        """An RGB image (height x width x 3, uint8) of the current state, from ``camera`` (offscreen)."""
-        if self._pending:
-            self._restore()
-        m = self.mj_model
-        m.vis.global_.offwidth = max(m.vis.global_.offwidth, width)
-        m.vis.global_.offheight = max(m.vis.global_.offheight, height)
+    def _renderer(self, width: int, height: int, purpose: str = "render") -> mujoco.Renderer:
+        """The offscreen renderer of this size (made once); without OpenGL a ``DGraphError`` (a
+        ``ParamError`` naming the parameter ``purpose`` when it is one) that says how to get it."""
         key = (width, height)
         renderer = self._renderers.get(key)
         if renderer is None:
-            renderer = self._renderers[key] = mujoco.Renderer(m, height, width)
-        renderer.update_scene(self.data, camera=camera)
+            m = self.mj_model
+            m.vis.global_.offwidth = max(m.vis.global_.offwidth, width)
+            m.vis.global_.offheight = max(m.vis.global_.offheight, height)
+            try:
+                renderer = self._renderers[key] = mujoco.Renderer(m, height, width)
+            except Exception as exc:  # MuJoCo's GL back-ends fail with FatalError, ImportError, AttributeError...
+                error = dg.ParamError if purpose != "render" else dg.DGraphError
+                raise error(f"{self.name}: {purpose}: offscreen rendering is not available "
+                            f"(MUJOCO_GL={os.environ.get('MUJOCO_GL', '(unset)')}: {type(exc).__name__}: {exc}); "
+                            "without a display set MUJOCO_GL=egl (or osmesa) before mujoco is imported",
+                            entity=self.name) from None
+        return renderer
+
+    def render(self, width: int = 320, height: int = 240, camera: str = "robot") -> np.ndarray:
+        """An RGB image (height x width x 3, uint8) of the current state, offscreen, from ``camera``:
+        ``robot`` (a free camera framing the whole robot, :class:`~dgraph_sim.camera.RobotCamera`)
+        or a camera of the model (``track``, ``front``)."""
+        if self._pending:
+            self._restore()
+        renderer = self._renderer(width, height)
+        view = self._camera.update(self.data, width, height) if camera == "robot" else camera
+        renderer.update_scene(self.data, camera=view)
         return renderer.render().copy()
 
     @dg.command
     def snapshot(self, path: str = "snapshot.png", width: int = 640, height: int = 480) -> str:
-        """Save a PNG image of the current state (tracking camera); returns the path."""
+        """Save a PNG image of the current state (the camera framing the robot); returns the path."""
         from PIL import Image
 
         Image.fromarray(self.render(width, height)).save(path)
         return path
 
     def _record_frame(self, t: int) -> None:
-        """After hook: keep a video frame every 1 / video_fps seconds."""
+        """After hook: add a video frame every 1 / video_fps seconds (the nearest whole number of
+        ticks; the video's frame rate is the one that makes). The first frame opens the writer
+        and, for an .mp4, takes a share of the graph's Rerun streams (closed with the device)."""
         if t < self._next_frame:
             return
-        self._frames.append(self.render(*self.video_size, camera=self.video_camera))
-        self._next_frame = t + max(1, round(1.0 / (self.video_fps * self.dt)))
+        interval = max(1, round(1.0 / (self.video_fps * self.dt)))
+        if self._video is None:
+            fps = 1 / (interval * Fraction(self.dt).limit_denominator(1_000_000_000))
+            try:
+                self._video = VideoWriter(self.video_path, fps, tuple(self.video_size))
+            except VideoError as exc:
+                raise dg.DGraphError(f"{self.name}: video_path: {exc}", entity=self.name) from None
+            if self._video.kind == ".mp4" and self.graph is not None:
+                from dgraph.entities.recording.rerun_stream import join_streams
+
+                self._video_streams = join_streams(self.graph)
+        try:
+            self._video.add(self.render(*self.video_size, camera=self.video_camera), t)
+        except VideoError as exc:
+            raise dg.DGraphError(f"{self.name}: video_path: {exc}", entity=self.name) from None
+        self._next_frame = t + interval
 
     def write_video(self) -> str | None:
-        """Write the recorded frames to ``video_path`` (animated GIF, WebP or PNG by its extension)."""
-        if self.video_path is None or not self._frames:
+        """Finish the video file ``video_path`` (its format by its extension: ``.mp4``, ``.gif``,
+        ``.webp``, ``.png``; see :mod:`dgraph_sim.video`) and log an .mp4 to the graph's Rerun
+        recording (entity ``video/<device name>``, each frame at its tick); returns the path, or
+        ``None`` if no frame was taken. Idempotent."""
+        if self._video is None:
             return None
-        from PIL import Image
-
-        images = [Image.fromarray(f) for f in self._frames]
         try:
-            Path(self.video_path).parent.mkdir(parents=True, exist_ok=True)
-            images[0].save(self.video_path, save_all=True, append_images=images[1:],
-                           duration=round(1000.0 / self.video_fps), loop=0)
-        except (OSError, ValueError) as exc:
-            raise dg.DGraphError(f"{self.name}: cannot write the video {self.video_path}: {exc}",
-                                 entity=self.name) from None
-        return self.video_path
+            path = self._video.close()
+            if path is not None:
+                for stream in self._video_streams:
+                    log_video(stream, f"video/{self.name}", path, self._video.ticks)
+        except VideoError as exc:
+            raise dg.DGraphError(f"{self.name}: video_path: {exc}", entity=self.name) from None
+        finally:
+            streams, self._video_streams = self._video_streams, []
+            for stream in streams:
+                stream.close()
+        return None if path is None else str(path)
 
     def close(self) -> None:
         """Write the video (if any) and free the renderers (freed even if the video fails)."""
         try:
             self.write_video()
         finally:
-            self._frames = []
             for renderer in self._renderers.values():
                 renderer.close()
-        self._renderers = {}
+            self._renderers = {}

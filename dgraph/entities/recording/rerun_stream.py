@@ -341,6 +341,16 @@ def open_stream(application_id: str, mode: str, rrd_path: str | None, dt: float,
     return stream
 
 
+def join_streams(owner: object) -> list[RerunStream]:
+    """The streams open for ``owner`` (a graph), each with one more user: an entity that logs
+    to the graph's recording without a sink of its own (a device's video, at close) keeps them
+    open until it calls :meth:`~RerunStream.close` on each."""
+    streams = [stream for stream in _OPEN.values() if stream.owner is owner]
+    for stream in streams:
+        stream.users += 1
+    return streams
+
+
 def safe_file_stem(name: str) -> str:
     """``name`` reduced to a file name that stays in its directory (no separators, no leading dot)."""
     stem = re.sub(r"[^A-Za-z0-9_.\-]", "_", name).lstrip(".")
