@@ -16,6 +16,7 @@ from dgraph.entities.contacts import Contact6d
 from dgraph.entities.estimators import FloatingBaseEstimator
 from dgraph.entities.features import AngularMomentum, CenterOfMass, FramePose, JointPosture
 from dgraph.entities.recording import Recorder, RobotView
+from dgraph.entities.recording.rerun_stream import recording_by_default
 from dgraph.entities.references import Sinusoid
 from dgraph.entities.robot import RobotModel
 from dgraph.entities.solvers import InverseDynamicsSolver
@@ -103,8 +104,9 @@ def main() -> None:
     parser.add_argument("--duration", type=float, default=20.0, help="simulated seconds")
     parser.add_argument("--rrd", default="out/talos_sway.rrd", help="Rerun recording to write")
     args = parser.parse_args()
-    graph = build(args.duration)
-    graph["recorder"].rrd_path = args.rrd
+    with recording_by_default("save"):  # the library records nothing unless asked: this script asks
+        graph = build(args.duration)
+    graph["recorder"].rrd_path = graph["view"].rrd_path = args.rrd  # one recording: series and 3D view
     with graph:
         graph.run(duration=args.duration)
     print(f"wrote {args.rrd}")

@@ -91,13 +91,36 @@ def test_unknown_recorded_signal_is_reported(tmp_path):
         g.step()
 
 
-def test_default_is_an_rrd_file_named_after_the_graph(tmp_path):
+def test_a_recorder_writes_nothing_unless_asked(tmp_path):
     g = dg.Graph(name="defaults")
     g.add(Ticker("dev"))
-    g.add(Recorder("rec", signals=["dev.x"]))
+    rec = g.add(Recorder("rec", signals=["dev.x"]))
     g.run(ticks=3)
     g.close()
-    assert (tmp_path / "out" / "defaults.rrd").stat().st_size > 0  # the test runs in tmp_path
+    assert rec.rerun == "off" and list(tmp_path.iterdir()) == []  # the test runs in tmp_path
+    assert rec.data()["dev.x"].tolist() == [0.0, 1.0, 2.0]  # recorded in memory all the same
+
+
+def test_save_defaults_to_an_rrd_file_named_after_the_graph_and_a_path_asks_for_save(tmp_path):
+    g = dg.Graph(name="defaults")
+    g.add(Ticker("dev"))
+    g.add(Recorder("rec", signals=["dev.x"], rerun="save"))
+    g.add(Recorder("named", signals=["dev.x"], rrd_path="named.rrd"))
+    g.run(ticks=3)
+    g.close()
+    assert g["named"].rerun == "save"
+    assert (tmp_path / "out" / "defaults.rrd").stat().st_size > 0 and (tmp_path / "named.rrd").stat().st_size > 0
+
+
+def test_the_session_default_applies_to_recorders_that_do_not_choose(tmp_path):
+    from dgraph.entities.recording.rerun_stream import recording_by_default
+
+    with recording_by_default("save"):
+        assert Recorder("a", signals=["dev.x"]).rerun == "save"
+        assert Recorder("b", signals=["dev.x"], rerun="off").rerun == "off"
+    assert Recorder("c", signals=["dev.x"]).rerun == "off"
+    with pytest.raises(dg.GraphError, match="Rerun sink 'disk'"), recording_by_default("disk"):
+        pass
     with pytest.raises(dg.ParamError, match="decimation"):
         Recorder("bad", signals=["dev.x"], decimation=0)
 
@@ -132,7 +155,7 @@ def test_columns_stay_aligned_after_a_failed_read_and_duplicates_are_refused(tmp
     g = dg.Graph(name="../../escape")
     g.add(Ticker("dev"))
     g.add(Scale("a"))
-    rec = g.add(Recorder("rec", signals=["dev.x", "a.y"]))
+    rec = g.add(Recorder("rec", signals=["dev.x", "a.y"], rerun="save"))
     with pytest.raises(dg.UnpluggedInputError):
         g.step()  # a.u is unplugged: nothing recorded for that tick
     g.plug("dev.x", "a.u")

@@ -9,7 +9,8 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.recording.columns import Table
-from dgraph.entities.recording.rerun_stream import RerunStream, default_flush_every, open_stream_for
+from dgraph.entities.recording.layout import LAYOUTS, blueprint, default_panels, parse_layout, signal_path
+from dgraph.entities.recording.rerun_stream import SINKS, RerunStream, default_flush_every, open_stream_for, sink_mode
 from dgraph.signals.signal import Signal
 
 
@@ -41,28 +42,39 @@ class Recorder(dg.Entity):
     text log at the fault's tick, sent with the series (one batch per flush). All are read from
     the graph's log, which keeps a tick's faults once the tick commits.
 
-    Parameters: ``signals`` (``entity.signal`` names), ``rerun`` (``save``, the default: an .rrd
-    file, ``rrd_path`` or ``out/<graph name>.rrd``; ``spawn``: a viewer; ``serve``: a web viewer
-    on loopback; ``off``), ``npz_path``, ``decimation`` (log one tick in N to Rerun),
-    ``flush_every`` (ticks buffered before sending to Rerun; default 1000 to a file, 200 to a
-    viewer: Rerun's cost is per send and per series, not per row). The Rerun sink is shared with the
-    other entities of the graph that open the same one (a ``RobotView``): one recording.
+    Parameters: ``signals`` (``entity.signal`` names), ``rerun`` (``save``: an .rrd file,
+    ``rrd_path`` or ``out/<graph name>.rrd``; ``spawn``: a viewer; ``serve``: a web viewer on
+    loopback; ``off``; not given: ``save`` if ``rrd_path`` is given, else nothing, unless the
+    session says otherwise, as ``dgraph run`` does: see
+    :func:`~dgraph.entities.recording.rerun_stream.sink_mode`), ``npz_path``, ``decimation``
+    (log one tick in N to Rerun), ``flush_every`` (ticks buffered before sending to Rerun;
+    default 1000 to a file, 200 to a viewer: Rerun's cost is per send and per series, not per
+    row), ``layout`` (the blueprint sent with the recording: ``default``, ``none``, or a list of
+    panels ``{title, signals}``; see :mod:`~dgraph.entities.recording.layout`). The Rerun sink is
+    shared with the other entities of the graph that open the same one (a ``RobotView``): one
+    recording, one blueprint (the first recorder's), with a 3D view of every robot view drawing
+    into it.
     """
 
     observes = True
     signals = dg.Param(kind="str_list", doc="names 'entity.signal' of the recorded signals")
-    rerun = dg.Param("save", kind="str", choices=("off", "save", "spawn", "serve"), doc="Rerun sink")
+    rerun = dg.Param(None, kind="str", choices=SINKS,
+                     doc="Rerun sink (default: save if rrd_path is given, else off unless dgraph run saves)")
     rrd_path = dg.Param(None, kind="str", doc=".rrd file for rerun=save (default out/<graph name>.rrd)")
     npz_path = dg.Param(None, kind="str", doc=".npz file written on close (default: none)")
     decimation = dg.Param(1, kind="int", doc="send one tick in N to Rerun")
     flush_every = dg.Param(None, kind="int",
                            doc="ticks buffered before a Rerun send (default: 1000 to a file, 200 to a viewer)")
+    layout = dg.Param("default", kind="object",
+                      doc=f"Rerun blueprint: {' or '.join(LAYOUTS)}, or a list of panels {{title, signals}}")
 
     def configure(self) -> None:
         """Check the parameters."""
         repeated = sorted({name for name in self.signals if self.signals.count(name) > 1})
         if repeated:
             raise dg.ParamError(f"{self.name}: signals recorded twice: {', '.join(repeated)}", entity=self.name)
+        self.rerun = sink_mode(self.rerun, self.rrd_path)
+        self._layout = parse_layout(self.layout, self.signals, self.name)
         if self.flush_every is None:
             self.flush_every = default_flush_every(self.rerun)
         if self.decimation < 1 or self.flush_every < 1:
@@ -147,12 +159,30 @@ class Recorder(dg.Entity):
             return
         if self._plotted is None:
             self._plotted = self._plotted_series()
+            self._send_blueprint()
         series = []
         for i, path, names in self._plotted:
             values = np.ascontiguousarray(self._rows.column(i, start)[keep], dtype=float)  # one copy at most
             series.append((path, names, values.reshape(len(values), -1)))
         if series:
             self._stream.send_series(ticks[keep], series)
+
+    def _send_blueprint(self) -> None:
+        """Send the layout's blueprint (once per sink): the panels (by default, those of the
+        plotted signals), a 3D view of each robot view drawing into the same recording."""
+        if self._layout == "none" or self._stream is None or self._stream.blueprint_sent:
+            return
+        if self._layout == "default":
+            panels = default_panels([self.signals[i - 1] for i, _, _ in self._plotted or []])
+        else:
+            panels = self._layout
+        origins: list[str] = []
+        for entity in self.graph or []:
+            if entity.type_name == "RobotView" and getattr(entity, "_stream", None) is self._stream:
+                origin = "/" + entity.path.split("/")[0]
+                if origin not in origins:
+                    origins.append(origin)
+        self._stream.send_blueprint(blueprint(panels, origins))
 
     def _plotted_series(self) -> list[tuple[int, str, list[str]]]:
         """The columns sent to Rerun (numbers; other values are kept in the .npz, not plotted):
@@ -161,7 +191,7 @@ class Recorder(dg.Entity):
         for i, (name, sig) in enumerate(zip(self.signals, self._sources or [], strict=True), start=1):
             column = self._rows.column(i)
             if column.dtype.kind in "fiub":
-                plotted.append((i, f"/signals/{name.replace('.', '/')}", component_names(sig, column.shape[1:])))
+                plotted.append((i, signal_path(name), component_names(sig, column.shape[1:])))
         return plotted
 
     @property

@@ -1,8 +1,11 @@
 """A thin wrapper over a Rerun recording stream: time series sent in columns.
 
-Rerun is imported only when a stream is opened. Sinks: ``save`` (an .rrd file, the default
-when headless), ``spawn`` (a local viewer process) and ``serve`` (a gRPC server and a web viewer,
-listening on loopback unless :func:`serving_on` says otherwise; see :class:`RerunServer`).
+Rerun is imported only when a stream is opened. Sinks: ``save`` (an .rrd file), ``spawn`` (a
+local viewer process), ``serve`` (a gRPC server and a web viewer, listening on loopback unless
+:func:`serving_on` says otherwise; see :class:`RerunServer`) and ``off``. An entity that does not
+choose its sink gets ``save`` if it names an .rrd file, else the session's default
+(:func:`sink_mode`): ``off`` for the library, so that loading and running a graph writes
+nothing unless asked; ``dgraph run`` makes it ``save`` (:func:`recording_by_default`).
 Series are sent in blocks of ticks, every series of a block in one Arrow record batch
 (one ``send_record_batch`` call: Rerun's cost is per call and per entity, not per row), so
 logging costs a few µs per tick instead of ~37 µs per ``log`` call.
@@ -45,6 +48,8 @@ class ServeAddress:
     bind: str = "127.0.0.1"
     grpc_port: int = 9876
     web_port: int = 9090
+    keep: bool = False
+    """Whether a server outlives its recording, until the :func:`serving_on` block that asked ends."""
 
     def local_host(self) -> str:
         """The address this machine reaches the servers at (loopback for a wildcard bind)."""
@@ -58,15 +63,21 @@ class ServeAddress:
 
 
 SERVE = ServeAddress()
-"""What the ``serve`` sink opens (:func:`serving_on`; ``dgraph run --rerun-bind``)."""
+"""What the ``serve`` sink opens (:func:`serving_on`; ``dgraph run --bind --port --web-viewer-port``)."""
+
+
+_KEPT: list[RerunServer] = []
+"""Servers whose recordings are closed, kept serving (``keep``) until their block ends."""
 
 
 @contextlib.contextmanager
-def serving_on(bind: str | None, grpc_port: int | None = None, web_port: int | None = None
-               ) -> Iterator[ServeAddress]:
+def serving_on(bind: str | None, grpc_port: int | None = None, web_port: int | None = None,
+               keep: bool = False) -> Iterator[ServeAddress]:
     """Within the block, ``serve`` sinks listen on ``bind`` (an IP address; ``None``: where they
     would) and on these ports if given; the address is restored after it, so one run's
-    ``--rerun-bind`` does not widen the next one's."""
+    ``--bind`` does not widen the next one's. With ``keep``, a server started in the block keeps
+    serving its recording after the recording is closed (:func:`kept_servers`), until the block
+    ends, which stops it."""
     global SERVE
     before = SERVE
     if bind is not None:
@@ -75,11 +86,46 @@ def serving_on(bind: str | None, grpc_port: int | None = None, web_port: int | N
         except ValueError:
             raise GraphError(f"Rerun serve address {bind!r}: not an IP address (127.0.0.1, 0.0.0.0, ::...)") from None
     SERVE = ServeAddress(before.bind if bind is None else bind, grpc_port or before.grpc_port,
-                         web_port or before.web_port)
+                         web_port or before.web_port, keep)
+    kept = len(_KEPT)
     try:
         yield SERVE
     finally:
         SERVE = before
+        while len(_KEPT) > kept:
+            _KEPT.pop().stop()
+
+
+def kept_servers() -> list[RerunServer]:
+    """The servers still serving closed recordings (see ``keep`` in :func:`serving_on`)."""
+    return [server for server in _KEPT if server.running()]
+
+
+DEFAULT_SINK = "off"
+"""The sink of an entity that neither chooses one nor names an .rrd file (:func:`sink_mode`)."""
+SINKS = ("off", "save", "spawn", "serve")
+
+
+@contextlib.contextmanager
+def recording_by_default(mode: str) -> Iterator[str]:
+    """Within the block, an entity that does not choose its Rerun sink gets ``mode`` (``dgraph
+    run`` saves by default; the library records nothing unless asked)."""
+    global DEFAULT_SINK
+    if mode not in SINKS:
+        raise GraphError(f"Rerun sink {mode!r}: expected one of {', '.join(SINKS)}")
+    before, DEFAULT_SINK = DEFAULT_SINK, mode
+    try:
+        yield mode
+    finally:
+        DEFAULT_SINK = before
+
+
+def sink_mode(rerun: str | None, rrd_path: str | None) -> str:
+    """The sink of a recording entity: its own ``rerun`` if given, else ``save`` if it names an
+    .rrd file (``rrd_path``), else :data:`DEFAULT_SINK` (``off`` unless :func:`recording_by_default`)."""
+    if rerun is not None:
+        return rerun
+    return "save" if rrd_path else DEFAULT_SINK
 
 
 class RerunServer:
@@ -132,6 +178,10 @@ class RerunServer:
     def stop(self) -> None:
         """Stop the server (once; later calls do nothing)."""
         self._stop()
+
+    def running(self) -> bool:
+        """Whether the server process is still running."""
+        return self._process.poll() is None
 
 
 def rerun_binary() -> str:
@@ -207,6 +257,7 @@ class RerunStream:
             self._serve(SERVE if serve is None else serve)
         self._series_fields: dict[str, Any] = {}  # the Arrow field of each series sent, by entity path
         self._faults_through = -1  # the last tick whose faults were sent (recorders sharing the sink send each once)
+        self.blueprint_sent = False
         self.users = 1
         self.application_id = application_id
         self.owner: object = None
@@ -250,6 +301,16 @@ class RerunStream:
             columns.append(pa.ListArray.from_arrays(offsets, pa.array(values.ravel())))
         self.send_batch(ticks, fields, columns)
 
+    def send_blueprint(self, blueprint: Any) -> bool:
+        """Send the recording's blueprint (a ``rerun.blueprint.Blueprint``), made active and the
+        default; only the first one sent (by the first recorder of a shared sink) is, the others
+        are ignored. Returns whether it was sent. An .rrd file holds it as its blueprint store."""
+        if self.blueprint_sent:
+            return False
+        self.blueprint_sent = True
+        self.rec.send_blueprint(blueprint, make_active=True, make_default=True)
+        return True
+
     def send_faults(self, faults: list[Fault]) -> None:
         """Log the faults as warnings on the ``faults`` text log, each at its tick, in one batch;
         those of a tick already sent (by another recorder of the same graph) are left out."""
@@ -273,7 +334,10 @@ class RerunStream:
             self.rec.disconnect()
         finally:
             if self._server is not None:
-                self._server.stop()
+                if self._server.address.keep and self._server.running():
+                    _KEPT.append(self._server)  # serves the closed recording until serving_on's block ends
+                else:
+                    self._server.stop()
 
 
 def index_fields() -> list[Any]:
@@ -305,7 +369,7 @@ run by at most this many ticks."""
 
 def default_flush_every(mode: str) -> int:
     """The default ``flush_every`` of a recording entity for the Rerun sink ``mode``."""
-    return FILE_FLUSH_EVERY if mode == "save" else VIEWER_FLUSH_EVERY
+    return VIEWER_FLUSH_EVERY if mode in ("spawn", "serve") else FILE_FLUSH_EVERY
 
 
 _OPEN: dict[tuple[str, str], RerunStream] = {}

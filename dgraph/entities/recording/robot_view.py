@@ -9,7 +9,14 @@ from typing import Any
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.recording.rerun_stream import RerunStream, component_field, default_flush_every, open_stream_for
+from dgraph.entities.recording.rerun_stream import (
+    SINKS,
+    RerunStream,
+    component_field,
+    default_flush_every,
+    open_stream_for,
+    sink_mode,
+)
 from dgraph.entities.robot.robot_state import load_robot
 
 FLOOR_HALF_SIZE = 2.0
@@ -87,8 +94,9 @@ class RobotView(dg.Entity):
     (``spawn``, ``serve``).
 
     Parameters: ``model`` (example-robot-data name), ``decimation``, ``path`` (entity path
-    prefix), ``floor``, ``rerun`` (``save`` | ``spawn`` | ``serve`` | ``off``), ``rrd_path``,
-    ``flush_every``. Inputs: ``q`` (``nq``, Pinocchio convention: a free-flyer base is
+    prefix), ``floor``, ``rerun`` (``save`` | ``spawn`` | ``serve`` | ``off``; not given: as the
+    :class:`Recorder`'s, ``save`` if ``rrd_path`` is given, else the session's default, nothing
+    for the library), ``rrd_path``, ``flush_every``. Inputs: ``q`` (``nq``, Pinocchio convention: a free-flyer base is
     ``x y z qx qy qz qw``).
     """
 
@@ -97,7 +105,8 @@ class RobotView(dg.Entity):
     decimation = dg.Param(20, kind="int", minimum=1, doc="log the poses one tick in N (20: 50 Hz at 1 kHz)")
     path = dg.Param("world/robot", kind="str", doc="Rerun entity path of the robot")
     floor = dg.Param(True, kind="bool", doc="also log a floor square and world axes")
-    rerun = dg.Param("save", kind="str", choices=("off", "save", "spawn", "serve"), doc="Rerun sink (off: nothing)")
+    rerun = dg.Param(None, kind="str", choices=SINKS,
+                     doc="Rerun sink (default: save if rrd_path is given, else off unless dgraph run saves)")
     rrd_path = dg.Param(None, kind="str", doc=".rrd file for rerun=save (default out/<graph name>.rrd)")
     flush_every = dg.Param(None, kind="int", minimum=1,
                            doc="ticks buffered before a Rerun send (default: 1000 to a file, 200 to a viewer)")
@@ -106,6 +115,7 @@ class RobotView(dg.Entity):
 
     def configure(self) -> None:
         """Load the model; list the links that carry visual geometries."""
+        self.rerun = sink_mode(self.rerun, self.rrd_path)
         if self.flush_every is None:
             self.flush_every = default_flush_every(self.rerun)
         self.path = self.path.strip("/")
