@@ -13,7 +13,6 @@ Frame conventions used throughout dgraph's robot entities:
 
 from __future__ import annotations
 
-import functools
 import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -22,6 +21,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from dgraph.entities.robot.loading import load_model, load_robot  # noqa: F401  (re-exported: older imports)
 from dgraph.errors import DGraphError, ParamError
 from dgraph.signals.value_types import value_type
 
@@ -300,31 +300,3 @@ class FrameReader:
             raise ParamError(f"{self.name}: the robot model has no frame {self.frame!r}", entity=self.name) from None
         self._frame_cache = (state.model, index)
         return index
-
-
-def load_model(model: Any, entity: str | None = None) -> pin.Model:
-    """A Pinocchio model from an example-robot-data name (e.g. ``talos``) or a ``pin.Model``.
-
-    Models loaded by name are cached per process (loading TALOS takes ~0.8 s) and shared:
-    entities must not modify them. A bad value raises :class:`ParamError` naming ``entity``.
-    """
-    if isinstance(model, pin.Model):
-        return model
-    prefix = f"{entity}: " if entity else ""
-    if not isinstance(model, str):
-        raise ParamError(f"{prefix}model must be a robot name or a pinocchio.Model, got {type(model).__name__}",
-                         entity=entity)
-    try:
-        return load_robot(model).model
-    except Exception as exc:  # example-robot-data raises plain exceptions for unknown names
-        raise ParamError(f"{prefix}cannot load robot model {model!r}: {exc}", entity=entity) from None
-
-
-@functools.lru_cache(maxsize=8)
-def load_robot(name: str) -> Any:
-    """``example_robot_data.load(name)``: the model with its collision and visual geometry,
-    cached per process and shared by every entity that names the robot (the kinematics, the
-    3D view): reading TALOS's URDF and meshes takes ~0.6 s, once. Only read, never changed."""
-    import example_robot_data as erd
-
-    return erd.load(name)
