@@ -1,6 +1,6 @@
 """The one place that maps Pinocchio conventions to MuJoCo conventions and back.
 
-A robot with a free-flyer base and one-dof joints is described twice:
+A robot with one-dof joints, on a free-flyer base or a fixed one, is described twice:
 
 ================  ==========================================  =========================================
                   Pinocchio (``q``, ``v``, ``tau``)           MuJoCo (``qpos``, ``qvel``, ``ctrl``)
@@ -16,6 +16,9 @@ actuators         ``tau`` = ``v[6:]`` order (actuated joints)  ``ctrl`` in actua
 So ``qvel = T(q) v`` with ``T = blkdiag(R_base, I3, P)`` (``P`` a permutation), kinetic energy
 gives ``M_pin = Tᵀ M_mj T`` and power gives generalised forces ``f_pin = Tᵀ f_mj``.
 Every map precomputes its index arrays, so a call costs a few microseconds.
+
+A fixed-base robot (an arm; Pinocchio's model has no free-flyer root, MuJoCo's welds the root link
+to the world) has no base rows: ``q``, ``v`` and ``tau`` are the joints', ``T = P``.
 """
 
 from __future__ import annotations
@@ -46,30 +49,36 @@ class JointMap:
     """Index maps between a Pinocchio model and a MuJoCo model of the same robot.
 
     Built from a ``pinocchio.Model`` and an ``mujoco.MjModel``; joints are matched by name.
-    The Pinocchio model must have a free-flyer root (named anything) and one-dof joints
-    otherwise; the MuJoCo model a free joint on the same base body and hinge/slide joints with
-    the same names. MuJoCo may have more joints (free bodies of a scene): they are ignored, and
-    the ``qpos``/``qvel`` given to the maps must be the full MuJoCo vectors.
+    The Pinocchio model has a free-flyer root (named anything) or a fixed base, and one-dof
+    joints otherwise; the MuJoCo model, for a free-flyer, a free joint on the same base body, and
+    hinge/slide joints with the same names. MuJoCo may have more joints (free bodies of a scene):
+    they are ignored, and the ``qpos``/``qvel`` given to the maps must be the full MuJoCo vectors.
 
-    The *actuated order* is Pinocchio's order of ``q[7:]`` / ``v[6:]``: joint torques, encoder
-    readings and position targets are exchanged in that order.
+    The *actuated order* is Pinocchio's order of ``q[7:]`` / ``v[6:]`` (a fixed base: ``q``,
+    ``v``): joint torques, encoder readings and position targets are exchanged in that order.
+    ``floating_base`` tells which; ``base_body`` is the MuJoCo body of the free joint, or the
+    root link welded to the world.
     """
 
     def __init__(self, pin_model: Any, mj_model: mujoco.MjModel):
         self.nq, self.nv = int(pin_model.nq), int(pin_model.nv)
-        self.na = self.nv - 6
-        if pin_model.njoints < 2 or pin_model.joints[1].shortname() != "JointModelFreeFlyer":
-            raise ValueError("JointMap needs a Pinocchio model with a free-flyer root joint")
-        free = [j for j in range(mj_model.njnt) if int(mj_model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE)]
-        if not free:
-            raise ValueError("JointMap needs a MuJoCo model with a free joint on the robot base")
-        self.free_joint = free[0]
-        self.base_body = int(mj_model.jnt_bodyid[self.free_joint])
-        free_qadr = int(mj_model.jnt_qposadr[self.free_joint])
-        free_vadr = int(mj_model.jnt_dofadr[self.free_joint])
+        self.floating_base = pin_model.njoints > 1 and pin_model.joints[1].shortname() == "JointModelFreeFlyer"
+        n_base = 6 if self.floating_base else 0
+        self.na = self.nv - n_base
+        if self.floating_base:
+            free = [j for j in range(mj_model.njnt) if int(mj_model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE)]
+            if not free:
+                raise ValueError("JointMap needs a MuJoCo model with a free joint on the robot base")
+            self.free_joint = free[0]
+            self.base_body = int(mj_model.jnt_bodyid[self.free_joint])
+            free_qadr = int(mj_model.jnt_qposadr[self.free_joint])
+            free_vadr = int(mj_model.jnt_dofadr[self.free_joint])
+        else:
+            self.free_joint = -1
+            free_qadr = free_vadr = -1
         self.joint_names: list[str] = []
         qadr, vadr = [], []
-        for jid in range(2, pin_model.njoints):
+        for jid in range(2 if self.floating_base else 1, pin_model.njoints):
             joint = pin_model.joints[jid]
             name = pin_model.names[jid]
             if joint.nq != 1 or joint.nv != 1:
@@ -87,10 +96,18 @@ class JointMap:
         self.qpos_joints = np.array(qadr, dtype=np.intp)
         #: qvel indices of the actuated joints, in actuated (Pinocchio) order
         self.qvel_joints = np.array(vadr, dtype=np.intp)
+        base_q, base_v = (free_qadr + _FREE_QPOS_OF_Q, free_vadr + np.arange(6)) if self.floating_base else ((), ())
         #: qpos index of each entry of q: ``q = qpos[qpos_index]``, ``qpos[qpos_index] = q``
-        self.qpos_index = np.concatenate([free_qadr + _FREE_QPOS_OF_Q, self.qpos_joints])
+        self.qpos_index = np.concatenate([base_q, self.qpos_joints]).astype(np.intp)
         #: qvel index of each entry of v (before the base linear velocity is rotated)
-        self.qvel_index = np.concatenate([free_vadr + np.arange(6), self.qvel_joints])
+        self.qvel_index = np.concatenate([base_v, self.qvel_joints]).astype(np.intp)
+        if not self.floating_base:  # the root link, welded to the world: the top body above the first joint
+            body = int(mj_model.jnt_bodyid[mujoco.mj_name2id(mj_model, mujoco.mjtObj.mjOBJ_JOINT, self.joint_names[0])])
+            self.base_body = int(mj_model.body_rootid[body])
+            if int(mj_model.body_jntnum[self.base_body]) and int(mj_model.jnt_type[mj_model.body_jntadr[
+                    self.base_body]]) == int(mujoco.mjtJoint.mjJNT_FREE):
+                raise ValueError("the Pinocchio model has a fixed base but the MuJoCo model a free joint on "
+                                 f"{mj_model.body(self.base_body).name!r}")
         self._qadr_free = free_qadr
         self._vadr_free = free_vadr
         # actuators: ctrl[k] drives actuated joint ctrl_index[k]
@@ -123,13 +140,17 @@ class JointMap:
 
     # -- velocity -----------------------------------------------------------------------------
     def base_quat_wxyz(self, qpos: np.ndarray) -> np.ndarray:
-        """The base orientation quaternion ``(w, x, y, z)`` held in ``qpos``."""
+        """The base orientation quaternion ``(w, x, y, z)`` held in ``qpos`` (a floating base)."""
+        if not self.floating_base:
+            raise ValueError("a fixed-base robot has no base orientation in qpos")
         return qpos[self._qadr_free + 3:self._qadr_free + 7]
 
     def qvel_from_v(self, q: np.ndarray, v: np.ndarray, qvel: np.ndarray | None = None) -> np.ndarray:
         """MuJoCo ``qvel`` from Pinocchio ``(q, v)``: the base linear velocity goes to the world frame."""
         out = np.zeros(self.mj_nv) if qvel is None else qvel
         out[self.qvel_index] = v
+        if not self.floating_base:
+            return out
         quat = self._quat
         quat[0] = q[6]
         quat[1:] = q[3:6]
@@ -140,6 +161,8 @@ class JointMap:
     def v_from_qvel(self, qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
         """Pinocchio ``v`` from MuJoCo ``(qpos, qvel)``: the base linear velocity goes to the base frame."""
         v = qvel[self.qvel_index]
+        if not self.floating_base:
+            return v
         quat = self._quat
         mujoco.mju_negQuat(quat, np.ascontiguousarray(self.base_quat_wxyz(qpos)))
         mujoco.mju_rotVecQuat(self._vec, np.ascontiguousarray(v[:3]), quat)
@@ -149,16 +172,21 @@ class JointMap:
     def velocity_transform(self, q: np.ndarray) -> np.ndarray:
         """The matrix ``T(q)`` (``mj_nv x nv``) with ``qvel = T v``; ``M_pin = Tᵀ M_mj T``."""
         T = np.zeros((self.mj_nv, self.nv))
+        n_base = self.nv - self.na
+        T[self.qvel_joints, np.arange(n_base, self.nv)] = 1.0
+        if not self.floating_base:
+            return T
         rot = np.zeros(9)
         mujoco.mju_quat2Mat(rot, np.ascontiguousarray(quat_wxyz_from_xyzw(q[3:7])))
         T[self._vadr_free:self._vadr_free + 3, 0:3] = rot.reshape(3, 3)
         T[self._vadr_free + 3:self._vadr_free + 6, 3:6] = np.eye(3)
-        T[self.qvel_joints, np.arange(6, self.nv)] = 1.0
         return T
 
     def generalized_force_from_qfrc(self, q: np.ndarray, qfrc: np.ndarray) -> np.ndarray:
         """Pinocchio generalised force ``Tᵀ f_mj`` from a MuJoCo ``qfrc`` vector (same power)."""
         f = qfrc[self.qvel_index]
+        if not self.floating_base:
+            return f
         quat = self._quat  # conjugate of the base orientation: world frame -> base frame
         quat[0] = q[6]
         quat[1:] = -q[3:6]

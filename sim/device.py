@@ -1,4 +1,5 @@
-"""The MuJoCo device entity: a TALOS (or another robot of :mod:`dgraph_sim.robots`) simulated by MuJoCo.
+"""The MuJoCo device entity: a robot of :mod:`dgraph_sim.robots` (TALOS, an arm, any example-robot-data
+robot or URDF file) simulated by MuJoCo.
 
 One tick ``t -> t + 1`` (``prepare_state(t)``): read ``control(t)`` (and the wrench inputs),
 compute the joint torques, save the MuJoCo integration state (``mj_getState``, without the applied
@@ -33,12 +34,13 @@ import mujoco
 import numpy as np
 
 import dgraph as dg
+from dgraph.entities.robot.loading import check_source
 from dgraph_sim.camera import RobotCamera
 from dgraph_sim.disturbances import Removals
 from dgraph_sim.model import SimModel, load
-from dgraph_sim.robots import ROBOTS
 from dgraph_sim.scenes import SCENES
 from dgraph_sim.video import VideoError, VideoWriter, check_video, log_video
+from dgraph_sim.viewer import PassiveViewer, ViewerError
 
 _STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION) & ~int(mujoco.mjtState.mjSTATE_QFRC_APPLIED
                                                           | mujoco.mjtState.mjSTATE_XFRC_APPLIED)
@@ -51,7 +53,6 @@ _BAD_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQ
 _BAD_WARNING_SLICE = slice(int(_BAD_WARNINGS[0]), int(_BAD_WARNINGS[-1]) + 1)
 """The bad qpos/qvel/qacc warnings are consecutive in ``mjtWarning``: one slice of ``warning.number``."""
 assert [int(w) for w in _BAD_WARNINGS] == list(range(_BAD_WARNING_SLICE.start, _BAD_WARNING_SLICE.stop))
-FT_SENSORS = ("left_ankle", "right_ankle", "left_wrist", "right_wrist")
 
 
 def _na(entity: MujocoDevice) -> tuple[int]:
@@ -65,12 +66,19 @@ def _port_name(body: str) -> str:
 
 @dg.register
 class MujocoDevice(dg.Device):
-    """A robot simulated by MuJoCo (TALOS built from the example-robot-data URDF), 1 tick = 1 step.
+    """A robot simulated by MuJoCo (built from the URDF that Pinocchio loads), 1 tick = 1 step.
+
+    ``model``: an example-robot-data robot name (``talos``, ``panda``, ``ur5``...) or the path of a
+    URDF file (its ``package://`` meshes found through ``package_dirs``, see
+    :mod:`dgraph_sim.robots`). What the robot has, its :class:`~dgraph_sim.robots.RobotInfo`
+    says: a floating base (``q`` starts with the base position and quaternion) or a fixed one
+    (``q`` is the joints'), an IMU, force/torque sensors, fall detection.
 
     Control modes: ``torque`` (``control`` = joint torques) or ``position`` (``control`` = joint
     position targets q*, ``tau = feedforward_torque + kp (q* - q) + kd (velocity_reference - v)``).
     Torques are clipped to the URDF effort limits; ``joint_torque`` reports what was applied.
-    Vectors of actuated joints are in Pinocchio's order of ``q[7:]`` / ``v[6:]``.
+    Vectors of actuated joints are in Pinocchio's order of ``q[7:]`` / ``v[6:]`` (a fixed base:
+    ``q``, ``v``).
 
     A non-finite command never reaches MuJoCo and does not stop the run: when the torque computed
     from the inputs at ``t`` (``control``, and in position mode ``feedforward_torque`` and
@@ -87,10 +95,13 @@ class MujocoDevice(dg.Device):
 
     Inputs: ``control`` (na), in position mode ``feedforward_torque`` and ``velocity_reference``
     (na, default zeros), ``wrench_<body>`` (6, world frame, at the body's CoM) for each of
-    ``wrench_bodies``. States: ``q``, ``v``, ``imu_orientation``, ``imu_angular_velocity``,
-    ``imu_linear_acceleration``, ``encoder_position``, ``encoder_velocity``, ``ft_left_ankle``,
-    ``ft_right_ankle``, ``ft_left_wrist``, ``ft_right_wrist``, ``joint_torque``,
-    ``contact_force_total``, ``sim_time``, ``fallen``, ``control_fault``.
+    ``wrench_bodies``. States: ``q``, ``v``, ``encoder_position``, ``encoder_velocity``,
+    ``joint_torque``, ``contact_force_total``, ``sim_time``, ``control_fault``; a robot with an IMU
+    (TALOS) adds ``imu_orientation``, ``imu_angular_velocity``, ``imu_linear_acceleration``; one
+    with force/torque sensors ``ft_<sensor>`` for each (TALOS: ``ft_left_ankle``,
+    ``ft_right_ankle``, ``ft_left_wrist``, ``ft_right_wrist``); a floating base with fall
+    detection (TALOS, or ``fall_height`` given) ``fallen`` (``q[2] < fall_height``). A fixed-base
+    arm has none of these.
 
     The sensor states (IMU, encoders, F/T) are raw readings (``finite=None``): a NaN or an
     infinity in one, as a real driver may hand over, is staged as it is and caught by its reader
@@ -103,9 +114,15 @@ class MujocoDevice(dg.Device):
     by that foot minus the foot's own weight). Sensor frames are Pinocchio frames:
     ``leg_left_6_joint``, ``leg_right_6_joint``, ``wrist_left_ft_link``, ``wrist_right_ft_link``;
     the IMU is at ``imu_link`` (on ``torso_2_link``).
+
+    ``viewer: true`` opens an interactive MuJoCo window (``mujoco.viewer.launch_passive``) synced
+    at ``viewer_fps`` and paced to the wall clock (:mod:`dgraph_sim.viewer`); it needs a display
+    (``DISPLAY`` or ``WAYLAND_DISPLAY``), else the device is refused with a ``ParamError``.
     """
 
-    model = dg.Param("talos", kind="str", choices=tuple(ROBOTS), doc="robot (dgraph_sim.robots)")
+    model = dg.Param("talos", kind="str", doc="example-robot-data robot name (talos, panda, ur5...) or URDF path")
+    package_dirs = dg.Param([], kind="str_list", doc="folders holding the packages of a URDF's package:// meshes "
+                            "(besides the URDF's folder and its ancestors)")
     scene = dg.Param("flat", kind="str", choices=tuple(SCENES), doc="scene (dgraph_sim.scenes)")
     collisions = dg.Param("all", kind="str", choices=("feet", "all"),
                           doc="robot geoms touching the scene: every collision mesh (never each other), or soles only")
@@ -114,13 +131,17 @@ class MujocoDevice(dg.Device):
                   "(default: the robot's, TALOS 3000, grippers 100)")
     kd = dg.Param(None, kind="vector", minimum=0.0, doc="position mode damping, N m s/rad, scalar or one per joint "
                   "(default: the robot's, TALOS 60, grippers 1)")
-    q0 = dg.Param(None, kind="vector", doc="initial configuration, nq (default: half-sitting on the floor)")
+    q0 = dg.Param(None, kind="vector", doc="initial configuration, nq (default: the robot's, TALOS half-sitting "
+                  "on the floor, else the SRDF reference posture or the neutral one)")
     v0 = dg.Param(None, kind="vector", doc="initial velocity, nv (default: zeros)")
     dt = dg.Param(None, kind="float", minimum=1e-6, maximum=1.0, doc="time step in s (default: the graph's dt)")
     wrench_bodies = dg.Param([], kind="str_list", doc="bodies getting a wrench_<body> input (world frame, at CoM)")
     remove_bodies = dg.Param([], kind="str_list", doc="scene mocap bodies removed during the run (unannounced)")
     remove_times = dg.Param([], kind="vector", doc="time (s) at which each of remove_bodies is removed")
-    fall_height = dg.Param(0.6, kind="float", doc="base height (m) under which fallen is true")
+    fall_height = dg.Param(None, kind="float", doc="base height (m) under which fallen is true (default: the "
+                           "robot's, TALOS 0.6; a floating base only)")
+    viewer = dg.Param(False, kind="bool", doc="show the simulation in an interactive MuJoCo window (needs a display)")
+    viewer_fps = dg.Param(30.0, kind="float", minimum=1.0, maximum=1000.0, doc="viewer frame rate (simulated time)")
     stop_on_fall = dg.Param(False, kind="bool", doc="raise a DGraphError when the robot falls")
     video_path = dg.Param(None, kind="str", doc="record a video (.mp4 H.264, .gif, .webp or .png), written at "
                           "close; an .mp4 is also logged to the graph's Rerun recording")
@@ -137,27 +158,25 @@ class MujocoDevice(dg.Device):
 
     q = dg.State(shape=("nq",), doc="configuration (Pinocchio: base position, quaternion xyzw, joints)")
     v = dg.State(shape=("nv",), doc="velocity (Pinocchio: base linear and angular in the base frame, joints)")
-    imu_orientation = dg.State(finite=None, shape=(4,), doc="IMU frame orientation in the world, quaternion xyzw")
-    imu_angular_velocity = dg.State(finite=None, shape=(3,), doc="IMU angular velocity in the IMU frame, rad/s")
-    imu_linear_acceleration = dg.State(finite=None, shape=(3,),
-                                       doc="IMU proper acceleration (a - g) in the IMU frame, m/s²")
     encoder_position = dg.State(finite=None, shape=_na, doc="actuated joint positions, rad")
     encoder_velocity = dg.State(finite=None, shape=_na, doc="actuated joint velocities, rad/s")
-    ft_left_ankle = dg.State(finite=None, shape=(6,), doc="left ankle wrench (foot on leg), sensor frame")
-    ft_right_ankle = dg.State(finite=None, shape=(6,), doc="right ankle wrench (foot on leg), sensor frame")
-    ft_left_wrist = dg.State(finite=None, shape=(6,), doc="left wrist wrench (hand on arm), sensor frame")
-    ft_right_wrist = dg.State(finite=None, shape=(6,), doc="right wrist wrench (hand on arm), sensor frame")
     joint_torque = dg.State(shape=_na, doc="applied joint torques after clipping, N m")
     contact_force_total = dg.State(shape=(3,), doc="sum of the contact forces the scene exerts on the robot, world")
     sim_time = dg.State(shape=(), doc="MuJoCo time, s")
-    fallen = dg.State(shape=(), dtype="bool", doc="base height below fall_height")
     control_fault = dg.State(shape=(), dtype="int", doc="consecutive ticks whose non-finite command was replaced "
                              "by the last valid one (0: the command was applied)")
 
     # -- construction -----------------------------------------------------------------------
     def configure(self) -> None:
-        """Load the model (cached per process), size the ports, declare the wrench inputs."""
-        self.sim: SimModel = load(self.model, self.scene, 0.001, self.collisions)
+        """Load the model (cached per process), size the ports, declare the sensor states the robot
+        has and the wrench inputs."""
+        check_source(self.model, self.name)
+        try:
+            self.sim: SimModel = load(self.model, self.scene, 0.001, self.collisions, tuple(self.package_dirs))
+        except ValueError as exc:  # a mesh not found, a joint MuJoCo cannot mirror
+            raise dg.ParamError(f"{self.name}: parameter 'model': cannot build {self.model!r}: {exc}",
+                                entity=self.name) from None
+        robot = self.sim.robot
         self.mj_model = copy.copy(self.sim.mj_model)  # own copy: the time step follows dt
         # software (llvmpipe) rendering: multisampling costs 4-6x (0.6 s -> 0.1 s at 320x240)
         self.mj_model.vis.quality.offsamples = 0
@@ -167,13 +186,20 @@ class MujocoDevice(dg.Device):
         self._gains = {}
         for name in ("kp", "kd"):
             value = getattr(self, name)
-            gain = np.asarray(getattr(self.sim.robot, name) if value is None else value, dtype=float)
+            default = getattr(robot, name)
+            if value is None and default is None:
+                if self.control_mode == "position":
+                    raise dg.ParamError(f"{self.name}: parameter {name!r}: position mode on {robot.name} needs kp and "
+                                        "kd (the robot has no default gains)", entity=self.name)
+                default = 0.0  # torque mode: no PD
+            gain = np.asarray(default if value is None else value, dtype=float)
             if gain.shape not in ((), (self.na,)) or not np.isfinite(gain).all():
                 raise dg.ParamError(f"{self.name}: parameter {name!r} must be a finite scalar or {self.na} values",
                                     entity=self.name)
             self._gains[name] = np.broadcast_to(gain, (self.na,)).copy()
         if len(self.video_size) != 2 or min(self.video_size) < 8 or max(self.video_size) > 4096:
             raise dg.ParamError(f"{self.name}: video_size must be [width, height] in 8..4096", entity=self.name)
+        self._declare_sensors(robot)
         if self.control_mode == "position":  # they would be silently ignored in torque mode
             self.declare("feedforward_torque", dg.Input(shape=(self.na,), default=np.zeros(self.na),
                                                         doc="added joint torque in position mode, N m"))
@@ -193,8 +219,30 @@ class MujocoDevice(dg.Device):
                                         doc=f"world-frame [force, torque] applied at the CoM of {body}"))
             self._wrenches.append((body_id, port))
 
+    def _declare_sensors(self, robot: object) -> None:
+        """The states of the robot's sensors (IMU, force/torque) and of its fall detection, if it has them."""
+        if robot.imu is not None:
+            self.declare("imu_orientation", dg.State(finite=None, shape=(4,),
+                                                     doc="IMU frame orientation in the world, quaternion xyzw"))
+            self.declare("imu_angular_velocity", dg.State(finite=None, shape=(3,),
+                                                          doc="IMU angular velocity in the IMU frame, rad/s"))
+            self.declare("imu_linear_acceleration", dg.State(
+                finite=None, shape=(3,), doc="IMU proper acceleration (a - g) in the IMU frame, m/s²"))
+        for key, site in robot.force_torque.items():
+            self.declare(f"ft_{key}", dg.State(finite=None, shape=(6,), doc=f"wrench at {site.pin_frame} (child side "
+                                               "on parent side), sensor frame"))
+        self._fall_height = robot.fall_height if self.fall_height is None else self.fall_height
+        if self.fall_height is not None and not robot.floating_base:
+            raise dg.ParamError(f"{self.name}: parameter 'fall_height': {robot.name} has a fixed base (no fall "
+                                "detection)", entity=self.name)
+        if self._fall_height is not None:
+            self.declare("fallen", dg.State(shape=(), dtype="bool", doc="base height below fall_height"))
+        elif self.stop_on_fall:
+            raise dg.ParamError(f"{self.name}: parameter 'stop_on_fall': {robot.name} has no fall detection (a "
+                                "fixed base, or no fall_height)", entity=self.name)
+
     def setup(self) -> None:
-        """MuJoCo data, buffers, removals and the video hook."""
+        """MuJoCo data, buffers, removals, the viewer and the video hook."""
         m = self.mj_model
         self.data = mujoco.MjData(m)
         try:
@@ -209,32 +257,12 @@ class MujocoDevice(dg.Device):
         self._ctrl_index, self._actuated_index = jm.ctrl_index, jm.actuated_index
         self._lower = -m.actuator_ctrlrange[self._actuated_index, 1]
         self._upper = m.actuator_ctrlrange[self._actuated_index, 1]
-        sensors = self.sim.sensors
-        # force then torque of each F/T sensor, in FT_SENSORS order: one block of sensordata
-        self._ft_states = [getattr(self, f"ft_{k}") for k in FT_SENSORS]
-        self._tick_states = [self.q, self.v, self.imu_orientation, self.imu_angular_velocity,
-                             self.imu_linear_acceleration, self.encoder_position, self.encoder_velocity,
-                             *self._ft_states, self.joint_torque, self.contact_force_total, self.sim_time]
-        start = sensors.force[FT_SENSORS[0]]
-        expected = [start + 6 * i + o for i in range(len(FT_SENSORS)) for o in (0, 3)]
-        if [a for k in FT_SENSORS for a in (sensors.force[k], sensors.torque[k])] != expected:
-            raise dg.DGraphError(f"{self.name}: force/torque sensors are not laid out as expected", entity=self.name)
-        # one gather of sensordata per tick: IMU quaternion (xyzw), gyro, accelerometer, then the
-        # F/T block (force then torque of each sensor, in FT_SENSORS order)
-        self._sensor_index = np.concatenate([
-            sensors.imu_quat + np.array([1, 2, 3, 0]), sensors.imu_gyro + np.arange(3),
-            sensors.imu_accelerometer + np.arange(3), start + np.arange(6 * len(FT_SENSORS))])
-        # MuJoCo reports the wrench the parent exerts on the child subtree: the F/T block is negated
-        self._sensor_sign = np.ones(len(self._sensor_index))
-        self._sensor_sign[10:] = -1.0
-        # the states that are parts of the gathered sensors: IMU orientation, gyro, accelerometer, F/T
-        self._sensor_parts = [(self.imu_orientation, slice(0, 4)), (self.imu_angular_velocity, slice(4, 7)),
-                              (self.imu_linear_acceleration, slice(7, 10)),
-                              *[(state, slice(10 + 6 * i, 16 + 6 * i)) for i, state in enumerate(self._ft_states)]]
+        self._setup_sensors()
         # the states that are q, v or views of them (the encoders: the joints' part)
-        self._q_parts = [(self.q, None), (self.encoder_position, slice(7, None))]
-        self._v_parts = [(self.v, None), (self.encoder_velocity, slice(6, None))]
-        self._base_z = int(self.joint_map.qpos_index[2])
+        self._floating = jm.floating_base
+        self._q_parts = [(self.q, None), (self.encoder_position, slice(self.nq - self.na, None))]
+        self._v_parts = [(self.v, None), (self.encoder_velocity, slice(self.nv - self.na, None))]
+        self._base_z = int(self.joint_map.qpos_index[2]) if self._floating else -1
         # views on the MjData buffers (fixed for its lifetime; mj_setState writes into them)
         d = self.data
         self._qpos, self._qvel, self._ctrl, self._xfrc = d.qpos, d.qvel, d.ctrl, d.xfrc_applied
@@ -245,7 +273,7 @@ class MujocoDevice(dg.Device):
         self._base_rt = d.xmat[jm.base_body].reshape(3, 3).T
         self._qpos_index, self._qvel_index = jm.qpos_index, jm.qvel_index
         base_linear = int(jm.qvel_index[0])  # the free joint's linear velocity (world frame): qvel[i:i + 3]
-        self._qvel_base_linear = d.qvel[base_linear:base_linear + 3]
+        self._qvel_base_linear = d.qvel[base_linear:base_linear + 3] if self._floating else None
         bodies = self.sim.robot_bodies  # a slice
         self._cfrc_robot = d.cfrc_ext[bodies, 3:]
         self._xfrc_robot = d.xfrc_applied[bodies, :3]
@@ -256,6 +284,13 @@ class MujocoDevice(dg.Device):
         self._timestep = float(m.opt.timestep)
         self._fallen_staged = self._fault_staged = False
         self._held = self._held_next = None
+        self._viewer: PassiveViewer | None = None
+        if self.viewer:
+            try:
+                self._viewer = PassiveViewer(m, d, self.dt, self.viewer_fps)
+            except ViewerError as exc:
+                raise dg.ParamError(f"{self.name}: parameter 'viewer': {exc}", entity=self.name) from None
+            self.after.add(self._viewer.sync)
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._camera = RobotCamera(m, self.sim.robot_bodies, jm.base_body)
         self._video: VideoWriter | None = None
@@ -269,6 +304,39 @@ class MujocoDevice(dg.Device):
             self._renderer(*self.video_size, purpose="video_path")  # no OpenGL: refused now, not at the first frame
             self.after.add(self._record_frame)
 
+    def _setup_sensors(self) -> None:
+        """One gather of ``sensordata`` per tick for the robot's sensors, and the states that are its parts.
+
+        The gather: IMU quaternion (xyzw), gyro, accelerometer (if the robot has an IMU), then the
+        F/T block (force then torque of each sensor, in the robot's order), negated: MuJoCo
+        reports the wrench the parent exerts on the child subtree.
+        """
+        robot, sensors = self.sim.robot, self.sim.sensors
+        imu = [self.imu_orientation, self.imu_angular_velocity, self.imu_linear_acceleration] \
+            if robot.imu is not None else []
+        self._ft_states = [getattr(self, f"ft_{k}") for k in robot.force_torque]
+        self._tick_states = [self.q, self.v, *imu, self.encoder_position, self.encoder_velocity,
+                             *self._ft_states, self.joint_torque, self.contact_force_total, self.sim_time]
+        index = []
+        if imu:
+            index += [sensors.imu_quat + np.array([1, 2, 3, 0]), sensors.imu_gyro + np.arange(3),
+                      sensors.imu_accelerometer + np.arange(3)]
+        n_imu = 10 if imu else 0
+        if self._ft_states:
+            keys = list(robot.force_torque)
+            start = sensors.force[keys[0]]
+            expected = [start + 6 * i + o for i in range(len(keys)) for o in (0, 3)]
+            if [a for k in keys for a in (sensors.force[k], sensors.torque[k])] != expected:
+                raise dg.DGraphError(f"{self.name}: force/torque sensors are not laid out as expected",
+                                     entity=self.name)
+            index.append(start + np.arange(6 * len(keys)))
+        self._sensor_index = np.concatenate(index).astype(np.intp) if index else np.zeros(0, dtype=np.intp)
+        self._sensor_sign = np.ones(len(self._sensor_index))
+        self._sensor_sign[n_imu:] = -1.0
+        self._sensor_parts = [*([(imu[0], slice(0, 4)), (imu[1], slice(4, 7)), (imu[2], slice(7, 10))] if imu else []),
+                              *[(state, slice(n_imu + 6 * i, n_imu + 6 + 6 * i))
+                                for i, state in enumerate(self._ft_states)]]
+
     def reset(self) -> None:
         """Put MuJoCo at ``q0``, ``v0`` (``mj_forward``) and the states at tick 0."""
         jm = self.joint_map
@@ -276,10 +344,11 @@ class MujocoDevice(dg.Device):
         v0 = np.zeros(self.nv) if self.v0 is None else np.asarray(self.v0, dtype=float)
         if q0.shape != (self.nq,) or v0.shape != (self.nv,) or not (np.isfinite(q0).all() and np.isfinite(v0).all()):
             raise dg.ParamError(f"{self.name}: q0 needs {self.nq} and v0 {self.nv} finite values", entity=self.name)
-        if not 0.5 < np.linalg.norm(q0[3:7]) < 2.0:
-            raise dg.ParamError(f"{self.name}: q0[3:7] must be a quaternion (x, y, z, w)", entity=self.name)
         q0 = q0.copy()
-        q0[3:7] /= np.linalg.norm(q0[3:7])
+        if self._floating:
+            if not 0.5 < np.linalg.norm(q0[3:7]) < 2.0:
+                raise dg.ParamError(f"{self.name}: q0[3:7] must be a quaternion (x, y, z, w)", entity=self.name)
+            q0[3:7] /= np.linalg.norm(q0[3:7])
         m, d = self.mj_model, self.data
         mujoco.mj_resetData(m, d)
         jm.qpos_from_q(q0, d.qpos)
@@ -368,7 +437,7 @@ class MujocoDevice(dg.Device):
             self.control_fault.stage(fault)
         if self.stop_on_fall and fallen:
             raise dg.DGraphError(f"{self.name}: the robot fell during tick {t} (base height "
-                                 f"{d.qpos[self._base_z]:.3f} m < fall_height {self.fall_height} m "
+                                 f"{d.qpos[self._base_z]:.3f} m < fall_height {self._fall_height} m "
                                  f"at tick {t + 1})", entity=self.name, signal="fallen")
 
     def _read_wrenches(self, t: int) -> list[tuple[int, np.ndarray]]:
@@ -435,7 +504,8 @@ class MujocoDevice(dg.Device):
         """
         q = self._qpos[self._qpos_index]                                 # JointMap.q_from_qpos
         v = self._qvel[self._qvel_index]                                 # JointMap.v_from_qvel: the base
-        np.dot(self._base_rt, self._qvel_base_linear, out=v[:3])         # linear velocity R_WB^T v
+        if self._floating:
+            np.dot(self._base_rt, self._qvel_base_linear, out=v[:3])     # linear velocity R_WB^T v
         sensors = self._sensordata[self._sensor_index] * self._sensor_sign  # F/T negated
         torque = self._actuator_force[self._actuated_index]
         # every array is this tick's own (a gather, or a view of one) and never written again: no
@@ -443,7 +513,9 @@ class MujocoDevice(dg.Device):
         dg.stage_views([(q, self._q_parts), (v, self._v_parts), (sensors, self._sensor_parts),
                         (torque, ((self.joint_torque, None),)), (contact_force, ((self.contact_force_total, None),))])
         self.sim_time.stage(self.data.time)
-        fallen = q.item(2) < self.fall_height  # the base height, qpos[self._base_z]
+        if self._fall_height is None:
+            return False
+        fallen = q.item(2) < self._fall_height  # the base height, qpos[self._base_z]
         self._fallen_staged = everything or fallen != self.fallen.value
         if self._fallen_staged:
             self.fallen.stage(fallen)
@@ -543,7 +615,11 @@ class MujocoDevice(dg.Device):
         return None if path is None else str(path)
 
     def close(self) -> None:
-        """Write the video (if any) and free the renderers (freed even if the video fails)."""
+        """Close the viewer (if any), write the video (if any) and free the renderers (freed even if the
+        video fails)."""
+        if self._viewer is not None:
+            self._viewer.close()
+            self._viewer = None
         try:
             self.write_video()
         finally:

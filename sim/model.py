@@ -14,17 +14,17 @@ import mujoco
 import numpy as np
 
 from dgraph_sim.conventions import JointMap
-from dgraph_sim.robots import ROBOTS, RobotInfo
+from dgraph_sim.robots import RobotInfo, robot_spec
 from dgraph_sim.scenes import add_scene
 
 
 @dataclass(frozen=True)
 class SensorLayout:
-    """Addresses in ``MjData.sensordata`` of the robot's sensors."""
+    """Addresses in ``MjData.sensordata`` of the robot's sensors (the IMU's are None without an IMU)."""
 
-    imu_quat: int
-    imu_gyro: int
-    imu_accelerometer: int
+    imu_quat: int | None
+    imu_gyro: int | None
+    imu_accelerometer: int | None
     force: dict[str, int]
     torque: dict[str, int]
 
@@ -52,25 +52,28 @@ def _sensor_adr(m: mujoco.MjModel, name: str) -> int:
 
 
 @lru_cache(maxsize=16)
-def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collisions: str = "all") -> SimModel:
-    """Build (once per process and arguments) the MuJoCo model of ``robot`` in ``scene``."""
-    if robot not in ROBOTS:
-        raise ValueError(f"unknown robot {robot!r}; known: {', '.join(ROBOTS)}")
+def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collisions: str = "all",
+         package_dirs: tuple[str, ...] = ()) -> SimModel:
+    """Build (once per process and arguments) the MuJoCo model of ``robot`` (an example-robot-data
+    name or a URDF path, :func:`dgraph_sim.robots.robot_spec`) in ``scene``."""
     if not (dt > 0.0 and np.isfinite(dt)):
         raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
-    spec, info = ROBOTS[robot](dt, collisions)
+    spec, info = robot_spec(robot, dt, collisions, tuple(package_dirs))
     add_scene(spec, scene, tracked_body=info.base_body)
     # NaN must reach our divergence check instead of MuJoCo silently resetting the state
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
     m = spec.compile()
+    imu = info.imu
     sensors = SensorLayout(
-        imu_quat=_sensor_adr(m, f"{info.imu.site}_quat"),
-        imu_gyro=_sensor_adr(m, f"{info.imu.site}_gyro"),
-        imu_accelerometer=_sensor_adr(m, f"{info.imu.site}_accelerometer"),
+        imu_quat=None if imu is None else _sensor_adr(m, f"{imu.site}_quat"),
+        imu_gyro=None if imu is None else _sensor_adr(m, f"{imu.site}_gyro"),
+        imu_accelerometer=None if imu is None else _sensor_adr(m, f"{imu.site}_accelerometer"),
         force={k: _sensor_adr(m, f"{s.site}_force") for k, s in info.force_torque.items()},
         torque={k: _sensor_adr(m, f"{s.site}_torque") for k, s in info.force_torque.items()},
     )
     base = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, info.base_body)
+    if base < 0:
+        raise ValueError(f"the base body {info.base_body!r} of {robot} is not in the MuJoCo model")
     ids = [b for b in range(m.nbody) if m.body_rootid[b] == base]
     if ids != list(range(ids[0], ids[-1] + 1)):
         raise ValueError(f"the bodies of {robot} are not contiguous in the MuJoCo model")

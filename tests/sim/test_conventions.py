@@ -18,6 +18,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from dgraph.entities.robot import load_robot
 from dgraph_sim.conventions import JointMap, quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
 from dgraph_sim.model import load
 from dgraph_sim.robots import SOLE_HALF_SIZE
@@ -159,7 +160,9 @@ def test_extra_joints_of_a_scene_are_ignored():
 
 
 def test_joint_map_refuses_mismatched_models(talos):
-    with pytest.raises(ValueError, match="free-flyer"):
+    with pytest.raises(ValueError, match="free joint on 'base_link'"):  # TALOS's joints on a fixed base
+        JointMap(pin.buildModelFromUrdf(load_robot("talos").urdf), talos.mj_model)
+    with pytest.raises(ValueError, match="not in the MuJoCo model"):  # a fixed-base arm: its joints are not TALOS's
         JointMap(pin.buildSampleModelManipulator(), talos.mj_model)
     spec = mujoco.MjSpec()
     spec.worldbody.add_body(name="b").add_freejoint()

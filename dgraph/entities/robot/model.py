@@ -67,7 +67,8 @@ class RobotModel(dg.Entity):
     """Rigid-body model of a robot (Pinocchio): one shared computation per tick.
 
     Inputs: ``q`` (nq, Pinocchio convention: free-flyer ``[xyz, quaternion xyzw]`` then
-    joints), ``v`` (nv: base linear and angular velocity in the base frame, then joints).
+    joints; a fixed base: the joints), ``v`` (nv: base linear and angular velocity in the base
+    frame, then joints).
 
     ``state`` runs the Pinocchio pass once per tick (:class:`RobotState`: ``computeAllTerms``,
     which also gives the drifts at ``a = 0``); every other output, and every feature, task
@@ -83,13 +84,15 @@ class RobotModel(dg.Entity):
       ``[p_dot, omega]``, ``<frame>_jacobian`` and ``<frame>_drift`` ``J_dot v``, all with
       world axes at the frame origin (see :mod:`dgraph.entities.robot.robot_state`).
 
-    Parameters: ``model`` (example-robot-data name, default ``talos``, or a ``pin.Model``),
+    Parameters: ``model`` (an example-robot-data name, default ``talos``, e.g. ``panda``,
+    ``ur5``; the path of a URDF file, a fixed-base model; or a ``pin.Model``; see
+    :mod:`dgraph.entities.robot.loading`),
     ``frames`` (frame names whose kinematics are published), ``tool_frames`` (extra frames at
     fixed offsets, ``{name: {parent: frame, translation: [x, y, z]}}``, e.g. a tool tip; the
     model is then this entity's own copy).
     """
 
-    model = dg.Param("talos", kind="object", doc="example-robot-data robot name or pinocchio.Model")
+    model = dg.Param("talos", kind="object", doc="example-robot-data robot name, URDF path or pinocchio.Model")
     frames = dg.Param((), kind="str_list", doc="frames whose placement, velocity, Jacobian and drift are outputs")
     tool_frames = dg.Param(None, kind="object", doc="extra frames: {name: {parent: frame, translation: [x, y, z]}}")
 
