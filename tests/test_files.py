@@ -576,7 +576,7 @@ def test_a_mistake_of_the_base_names_the_base_when_a_scenario_is_loaded(base, li
 def test_a_bad_robot_is_blamed_on_the_file_that_names_it(tmp_path):
     path = scenario(tmp_path, "name: x\nrobot: tals\n", "robot: talos\nentities:\n  device: {type: MujocoDevice}\n")
     with pytest.raises(dg.GraphFileError,
-                       match=r"parameter 'model': unknown robot 'tals'; did you mean 'talos'") as info:
+                       match=r"model 'tals' \(parameter 'model'\): unknown robot; did you mean 'talos'") as info:
         dg.load(path)
     assert (info.value.file, info.value.line, info.value.key) == (str(path), 3, "robot")
 

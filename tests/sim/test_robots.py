@@ -98,11 +98,12 @@ def test_an_arm_in_position_mode_with_gains_holds_a_target():
 
 @pytest.mark.parametrize("entity", [MujocoDevice, RobotModel])
 def test_an_unknown_robot_names_the_entity_the_parameter_and_the_nearest_names(entity):
-    with pytest.raises(dg.ParamError, match=r"robot: parameter 'model': unknown robot 'pandaa'; did you mean "
-                                            r"'panda'") as info:
+    with pytest.raises(dg.ParamError, match=r"robot: cannot load robot model 'pandaa' \(parameter 'model'\): "
+                                            r"unknown robot; did you mean 'panda'") as info:
         entity("robot", model="pandaa")
     assert info.value.entity == "robot"
-    with pytest.raises(dg.ParamError, match=r"robot: parameter 'model': no URDF file '/nowhere/arm.urdf'"):
+    with pytest.raises(dg.ParamError, match=r"robot: cannot load robot model '/nowhere/arm.urdf' \(parameter "
+                                            r"'model'\): no such URDF file"):
         entity("robot", model="/nowhere/arm.urdf")
 
 

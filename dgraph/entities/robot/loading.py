@@ -47,13 +47,15 @@ def check_source(source: Any, entity: str | None = None, param: str = "model") -
                          f"got {source!r}", entity=entity)
     if is_urdf_path(source):
         if not os.path.isfile(source):
-            raise ParamError(f"{prefix}parameter {param!r}: no URDF file {source!r}", entity=entity)
+            raise ParamError(f"{prefix}cannot load robot model {source!r} (parameter {param!r}): no such URDF file",
+                             entity=entity)
         return source
     if source not in robot_names():
         close = difflib.get_close_matches(source, robot_names(), n=3)
         hint = f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
-        raise ParamError(f"{prefix}parameter {param!r}: unknown robot {source!r}{hint} (an example-robot-data "
-                         f"name such as 'talos', 'panda', 'ur5', or the path of a URDF file)", entity=entity)
+        raise ParamError(f"{prefix}cannot load robot model {source!r} (parameter {param!r}): unknown robot{hint} "
+                         "(an example-robot-data name such as 'talos', 'panda', 'ur5', or the path of a URDF file)",
+                         entity=entity)
     return source
 
 
@@ -67,8 +69,8 @@ def load_model(model: Any, entity: str | None = None) -> pin.Model:
         return model
     prefix = f"{entity}: " if entity else ""
     if not isinstance(model, str):
-        raise ParamError(f"{prefix}model must be a robot name, a URDF path or a pinocchio.Model, got "
-                         f"{type(model).__name__}", entity=entity)
+        raise ParamError(f"{prefix}model must be a robot name or a pinocchio.Model, got {type(model).__name__} (a "
+                         "name: example-robot-data's, or a URDF path)", entity=entity)
     source = check_source(model, entity)
     try:
         return _urdf_model(os.path.realpath(source)) if is_urdf_path(source) else load_robot(source).model
