@@ -146,6 +146,7 @@ class MujocoDevice(dg.Device):
     video_path = dg.Param(None, kind="str", doc="record a video (.mp4 H.264, .gif, .webp or .png), written at "
                           "close; an .mp4 is also logged to the graph's Rerun recording")
     video_fps = dg.Param(25.0, kind="float", minimum=0.1, maximum=1000.0, doc="video frame rate")
+    video_start = dg.Param(0.0, kind="float", minimum=0.0, doc="time (s) of the first video frame")
     video_size = dg.Param([320, 240], kind="int_list", doc="video width and height in pixels")
     video_camera = dg.Param("robot", kind="str", choices=("robot", "track", "front"),
                             doc="video camera: framing the whole robot (following it past a dead zone), "
@@ -573,12 +574,17 @@ class MujocoDevice(dg.Device):
 
     def _record_frame(self, t: int) -> None:
         """After hook: add a video frame every 1 / video_fps seconds (the nearest whole number of
-        ticks; the video's frame rate is the one that makes). The first frame opens the writer
-        and, for an .mp4, takes a share of the graph's Rerun streams (closed with the device)."""
+        ticks; the video's frame rate is the one that makes) from ``video_start`` on. The first
+        frame opens the writer and, for an .mp4, takes a share of the graph's Rerun streams
+        (closed with the device)."""
         if t < self._next_frame:
             return
         interval = max(1, round(1.0 / (self.video_fps * self.dt)))
         if self._video is None:
+            start = math.ceil(self.video_start / self.dt - 1e-9)  # the first tick at or after video_start
+            if t < start:
+                self._next_frame = start
+                return
             fps = 1 / (interval * Fraction(self.dt).limit_denominator(1_000_000_000))
             try:
                 self._video = VideoWriter(self.video_path, fps, tuple(self.video_size))

@@ -71,6 +71,14 @@ def test_an_mp4_decodes_back_and_is_in_the_rerun_recording(tmp_path, recorder_fi
     assert [d.total_seconds() for d in logged["time"]] == pytest.approx([0.001, 0.011, 0.021, 0.031, 0.041])
 
 
+def test_frames_start_at_video_start(tmp_path):
+    run_device(tmp_path, "run.mp4", 45, video_fps=100.0, video_size=[32, 24], video_start=0.0195)
+    assert len(decode(tmp_path / "run.mp4")[0]) == 3
+    logged = video_chunks(tmp_path / "run.rrd", "/video/sim")
+    assert logged["tick"] == [20, 30, 40]  # the first tick at or after 19.5 ms, then every 10 ticks
+    assert [ts[0] for ts in logged["VideoFrameReference:timestamp"]] == [0, 10_000_000, 20_000_000]
+
+
 def test_without_a_rerun_recording_the_mp4_is_still_written(tmp_path):
     run_device(tmp_path, "run.mp4", 25, rerun="off", video_fps=100.0, video_size=[32, 24])
     frames, _ = decode(tmp_path / "run.mp4")
