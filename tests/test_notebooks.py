@@ -48,7 +48,8 @@ def kernel_specs(tmp_path_factory: pytest.TempPathFactory) -> KernelSpecManager:
 
 def test_the_notebooks_are_there():
     names = {path.name for path in NOTEBOOKS}
-    assert {"01_build_and_inspect.ipynb", "02_talos_graph_file.ipynb"} <= names
+    assert {"01_build_and_inspect.ipynb", "02_talos_graph_file.ipynb", "03_energy_tank.ipynb",
+            "04_compare_controllers.ipynb"} <= names
     assert FAST <= names
 
 
