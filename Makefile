@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 
 ## demo: TALOS sways 20 s in MuJoCo (headless), writing out/talos_sway.rrd and .npz
 demo: $(STAMP)
-	$(BIN)/dgraph run graphs/talos_sway.yaml --rerun save out/talos_sway.rrd --npz out/talos_sway.npz
+	$(BIN)/dgraph run graphs/talos_sway.yaml --save out/talos_sway.rrd --npz out/talos_sway.npz
 
 ## test: lint, then the whole test suite
 test: $(STAMP) lint

@@ -1,15 +1,19 @@
 """The ``dgraph`` command: run, check and draw graph files, list entity types.
 
     dgraph run FILE [--duration S | --ticks N] [--set entity.name=value ...]
-                    [--rerun save PATH | spawn | serve | off] [--rerun-bind ADDRESS]
-                    [--npz PATH] [--debug-checks]
+                    [--save PATH | --serve | --spawn | --no-rerun]
+                    [--bind ADDRESS] [--port PORT] [--web-viewer-port PORT] [--keep-serving]
+                    [--npz PATH] [--video PATH] [-q] [--debug-checks]
     dgraph check FILE
     dgraph profile FILE [--duration S | --ticks N] [--set entity.name=value ...]
     dgraph show FILE --format dot|mermaid [--signals] [-o OUT]
     dgraph entities [TYPE]
     dgraph --version
 
-``python -m dgraph ...`` is the same command. Output piped into a command that stops reading
+``python -m dgraph ...`` is the same command. The Rerun sink options are those of Rerun's own
+scripts (``--save``, ``--serve``; ``--spawn`` opens a viewer) and its server's (``--bind``,
+``--port`` for gRPC, ``--web-viewer-port``); without one, ``run`` saves ``out/NAME.rrd`` unless
+the file chooses its recorders' sinks. Output piped into a command that stops reading
 (``dgraph entities | head -1``) ends the command quietly, with status 0.
 
 Values given to ``--set`` are parsed as YAML scalars or flow lists (``1.5``, ``[0, 0.05, 0]``,
@@ -60,46 +64,71 @@ def _recorder_names(path: str, types: tuple[str, ...] = ("Recorder",)) -> tuple[
     return names, safe_file_stem(data.get("name", Path(path).stem))
 
 
+def _sink(args: argparse.Namespace) -> str | None:
+    """The Rerun sink chosen on the command line, or ``None`` (the file's, else ``save``)."""
+    if args.save is not None:
+        return "save"
+    return "serve" if args.serve else "spawn" if args.spawn else "off" if args.no_rerun else None
+
+
+def _suffixed(path: str, name: str, names: list[str]) -> str:
+    """``path`` for the entity ``name``: as given if it is the only one, else with ``_name`` added
+    to its stem (two recorders, or two devices, never write one file)."""
+    return path if len(names) == 1 else str(Path(path).with_stem(Path(path).stem + f"_{name}"))
+
+
 def _recorder_overrides(path: str, args: argparse.Namespace) -> dict[str, Any]:
-    """Point every recorder of the file at the sinks chosen on the command line (what the
-    command line does not say is left as the file says)."""
-    names, stem = _recorder_names(path)
+    """Point every recorder and robot view of the file at the sink chosen on the command line, and
+    every MuJoCo device at ``--video`` (what the command line does not say is left as the file says)."""
+    names, _ = _recorder_names(path)
+    mode = _sink(args)
     out: dict[str, Any] = {}
     for name in names:
-        suffix = "" if len(names) == 1 else f"_{name}"
-        if args.rerun:
-            mode, rrd = _rerun_mode(args.rerun, stem)
+        if mode is not None:
             out[f"{name}.rerun"] = mode
             if mode == "save":
-                out[f"{name}.rrd_path"] = str(Path(rrd).with_stem(Path(rrd).stem + suffix))
+                out[f"{name}.rrd_path"] = _suffixed(args.save, name, names)
         if args.npz:
-            out[f"{name}.npz_path"] = str(Path(args.npz).with_stem(Path(args.npz).stem + suffix))
-    if args.rerun:  # robot views draw into the (first) recorder's recording
-        mode, rrd = _rerun_mode(args.rerun, stem)
+            out[f"{name}.npz_path"] = _suffixed(args.npz, name, names)
+    if mode is not None:  # robot views draw into the (first) recorder's recording
         for view in _recorder_names(path, ("RobotView",))[0]:
             out[f"{view}.rerun"] = mode
             if mode == "save":
-                out[f"{view}.rrd_path"] = out.get(f"{names[0]}.rrd_path", rrd) if names else rrd
+                out[f"{view}.rrd_path"] = out[f"{names[0]}.rrd_path"] if names else args.save
+    if args.video:
+        devices = _recorder_names(path, ("MujocoDevice",))[0]
+        if not devices:
+            raise GraphFileError(f"--video {args.video}: the graph has no MujocoDevice to film", file=path)
+        out.update({f"{device}.video_path": _suffixed(args.video, device, devices) for device in devices})
     return out
 
 
-def _rerun_mode(option: list[str], stem: str) -> tuple[str, str | None]:
-    mode = option[0]
-    if mode == "save":
-        return "save", option[1] if len(option) > 1 else f"out/{stem}.rrd"
-    if mode in ("spawn", "serve", "off") and len(option) == 1:
-        return mode, None
-    raise GraphFileError(f"--rerun {' '.join(option)}: expected 'save [PATH]', 'spawn', 'serve' or 'off'",
-                         file="<command line>")
-
-
 def cmd_run(args: argparse.Namespace) -> int:
-    """Load, validate and run a graph file, then report what was written; ``--rerun-bind`` is
-    where ``serve`` sinks listen during this run (loopback unless given)."""
-    from dgraph.entities.recording.rerun_stream import serving_on
+    """Load, validate and run a graph file, then report what was written. Recorders that do not
+    choose their Rerun sink save ``out/NAME.rrd``; ``--bind``, ``--port`` and ``--web-viewer-port``
+    are where ``serve`` sinks listen during this run (loopback, 9876 and 9090 unless given); with
+    ``--keep-serving`` their servers serve the recording after the run, until Ctrl-C."""
+    from dgraph.entities.recording.rerun_stream import kept_servers, recording_by_default, serving_on
 
-    with serving_on(args.rerun_bind):
-        return _run(args)
+    with serving_on(args.bind, args.port, args.web_viewer_port, keep=args.keep_serving), \
+            recording_by_default("save"):
+        code = _run(args)
+        if args.keep_serving:
+            servers = kept_servers()
+            if not servers:
+                print("--keep-serving: nothing is served (no recorder of this run serves: add --serve)",
+                      file=sys.stderr)
+                return code
+            for server in servers:
+                print(f"serving the recording at {server.viewer_url} until Ctrl-C", file=sys.stderr, flush=True)
+            try:
+                while any(server.running() for server in servers):
+                    time.sleep(0.2)
+            except KeyboardInterrupt:
+                print("Ctrl-C: stopped serving", file=sys.stderr)
+                return code
+            print("the Rerun server stopped", file=sys.stderr)
+    return code
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -128,6 +157,9 @@ def _run(args: argparse.Namespace) -> int:
               f"(real-time factor {simulated / wall if wall > 0 else float('inf'):.1f})")
         _print_faults(graph)
         for entity in graph:
+            video = getattr(entity, "video_path", None)
+            if isinstance(video, str) and Path(video).is_file():
+                print(f"  {entity.name}: video -> {video}")
             if entity.type_name == "Recorder":
                 for label, target in (("rerun", entity.rrd_path), ("npz", entity.npz_path)):
                     if target and (label == "npz" or entity.rerun == "save") and Path(target).is_file():
@@ -217,6 +249,54 @@ def cmd_entities(args: argparse.Namespace) -> int:
     return 0
 
 
+def _port(text: str) -> int:
+    """A TCP port number, for argparse."""
+    try:
+        port = int(text)
+    except ValueError:
+        port = -1
+    if not 1 <= port <= 65535:
+        raise argparse.ArgumentTypeError(f"expected a TCP port in 1..65535, got {text!r}")
+    return port
+
+
+def _shared_parsers() -> dict[str, argparse.ArgumentParser]:
+    """The options that several subcommands share, as argparse parent parsers: the graph file,
+    the run length, ``--set``."""
+    graph_file = argparse.ArgumentParser(add_help=False)
+    graph_file.add_argument("file", help="the graph file (YAML)")
+    length = argparse.ArgumentParser(add_help=False)
+    group = length.add_mutually_exclusive_group()
+    group.add_argument("--duration", type=float, metavar="S",
+                       help="seconds of control time (default: the file's duration; for profile, "
+                            f"else {PROFILE_TICKS} ticks)")
+    group.add_argument("--ticks", type=int, metavar="N", help="number of ticks")
+    settings = argparse.ArgumentParser(add_help=False)
+    settings.add_argument("--set", action="append", default=[], metavar="ENTITY.NAME=VALUE",
+                          help="override a parameter or set an input constant (repeatable)")
+    return {"file": graph_file, "length": length, "set": settings}
+
+
+def _add_sink_options(run: argparse.ArgumentParser) -> None:
+    """The Rerun sink options of ``run`` (named as Rerun's own scripts and server name them)."""
+    sink = run.add_argument_group("Rerun recording (default: the file's sinks, else save out/NAME.rrd)")
+    choice = sink.add_mutually_exclusive_group()
+    choice.add_argument("--save", metavar="PATH", help="save the recording to this .rrd file")
+    choice.add_argument("--serve", action="store_true",
+                        help="serve a web viewer and Rerun's gRPC server (on loopback unless --bind) and "
+                             "print the viewer's URL")
+    choice.add_argument("--spawn", action="store_true", help="open a Rerun viewer on this machine")
+    choice.add_argument("--no-rerun", action="store_true", help="no Rerun recording at all")
+    sink.add_argument("--bind", metavar="ADDRESS",
+                      help="IP address that --serve listens on (default 127.0.0.1, this machine only; "
+                           "0.0.0.0 or :: opens the gRPC server and the web viewer to the network)")
+    sink.add_argument("--port", type=_port, metavar="PORT", help="gRPC port of --serve (default 9876)")
+    sink.add_argument("--web-viewer-port", type=_port, metavar="PORT",
+                      help="web viewer port of --serve (default 9090)")
+    sink.add_argument("--keep-serving", action="store_true",
+                      help="after the run, keep serving the recording until Ctrl-C (with --serve)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``dgraph`` command."""
     parser = argparse.ArgumentParser(prog="dgraph", description="Run, check and draw dgraph graph files.")
@@ -224,40 +304,23 @@ def build_parser() -> argparse.ArgumentParser:
                         help="print the installed version of dgraph and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
                                 help="what to do (dgraph COMMAND -h for its options)")
-    file_help = "the graph file (YAML)"
-    set_help = "override a parameter or set an input constant (repeatable)"
-    run = sub.add_parser("run", help="run a graph file")
-    run.add_argument("file", nargs="?", help=file_help)
-    length = run.add_mutually_exclusive_group()
-    length.add_argument("--duration", type=float, metavar="S",
-                        help="seconds of control time (default: the file's duration)")
-    length.add_argument("--ticks", type=int, metavar="N", help="number of ticks")
-    run.add_argument("--set", action="append", default=[], metavar="ENTITY.NAME=VALUE", help=set_help)
-    run.add_argument("--rerun", nargs="+", metavar="MODE",
-                     help="save [PATH] (default out/NAME.rrd), spawn, serve or off")
-    run.add_argument("--rerun-bind", metavar="ADDRESS",
-                     help="IP address that --rerun serve listens on (default 127.0.0.1, this machine only; "
-                          "0.0.0.0 or :: opens the gRPC server and the web viewer to the network)")
+    shared = _shared_parsers()
+    run = sub.add_parser("run", help="run a graph file", parents=[shared["file"], shared["length"], shared["set"]])
+    _add_sink_options(run)
     run.add_argument("--npz", metavar="PATH", help="also write the recorded signals to this .npz file")
+    run.add_argument("--video", metavar="PATH",
+                     help="film the run: the video_path of every MujocoDevice of the file")
     run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     run.add_argument("--debug-checks", action="store_true",
                      help="check every computed value (shape, NaN) and every read against its declared "
                           "dependencies (slow; names the first signal that goes wrong)")
     run.set_defaults(func=cmd_run)
-    check = sub.add_parser("check", help="load and validate a graph file")
-    check.add_argument("file", help=file_help)
+    check = sub.add_parser("check", help="load and validate a graph file", parents=[shared["file"]])
     check.set_defaults(func=cmd_check)
-    prof = sub.add_parser("profile", help="time each entity over a run (per tick)")
-    prof.add_argument("file", help=file_help)
-    prof_length = prof.add_mutually_exclusive_group()
-    prof_length.add_argument("--duration", type=float, metavar="S",
-                             help="seconds of control time (default: the file's duration, "
-                                  f"else {PROFILE_TICKS} ticks)")
-    prof_length.add_argument("--ticks", type=int, metavar="N", help="number of ticks")
-    prof.add_argument("--set", action="append", default=[], metavar="ENTITY.NAME=VALUE", help=set_help)
+    prof = sub.add_parser("profile", help="time each entity over a run (per tick)",
+                          parents=[shared["file"], shared["length"], shared["set"]])
     prof.set_defaults(func=cmd_profile)
-    show = sub.add_parser("show", help="draw a graph file as Graphviz dot or Mermaid")
-    show.add_argument("file", help=file_help)
+    show = sub.add_parser("show", help="draw a graph file as Graphviz dot or Mermaid", parents=[shared["file"]])
     show.add_argument("--format", choices=("dot", "mermaid"), default="dot",
                       help="Graphviz dot or Mermaid flowchart (default dot)")
     show.add_argument("--signals", action="store_true", help="signal-level drawing")
@@ -269,21 +332,10 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _take_file_back(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
-    """``--rerun off FILE`` lets --rerun swallow FILE: give it back."""
-    if getattr(args, "file", "") is None:
-        tokens = args.rerun or []
-        if len(tokens) > 1 and tokens[-1].endswith((".yaml", ".yml")):
-            args.file = tokens.pop()
-        else:
-            parser.error("the following arguments are required: file")
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``dgraph`` command."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    _take_file_back(args, parser)
     try:
         code = args.func(args)
         sys.stdout.flush()  # a broken pipe shows here, not at exit

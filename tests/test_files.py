@@ -514,7 +514,7 @@ def test_the_command_line_runs_a_composed_file(tmp_path, capsys):
     from dgraph.cli import main
 
     path = scenario(tmp_path, "duration: 0.05\nset: {k.gain: 4.0}\n")
-    assert main(["run", str(path), "--rerun", "off", "-q", "--set", "k.gain=5.0",
+    assert main(["run", str(path), "--no-rerun", "-q", "--set", "k.gain=5.0",
                  "--npz", str(tmp_path / "run.npz")]) == 0
     assert np.load(tmp_path / "run.npz")["k.output"].shape == (5, 2)
 

@@ -234,7 +234,7 @@ def test_a_graph_file_with_a_glitch_runs_and_reports_its_degraded_tick(tmp_path)
     graph_file.write_text(FAULTY_STANDING.format(base=ROOT / "graphs" / "talos_standing.yaml"))
     npz = tmp_path / "faulty.npz"
     result = subprocess.run([str(Path(sys.executable).parent / "dgraph"), "run", str(graph_file), "--duration", "0.5",
-                             "--rerun", "off", "--npz", str(npz), "-q"], capture_output=True, text=True, timeout=300)
+                             "--no-rerun", "--npz", str(npz), "-q"], capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     assert "degraded ticks: 1 of 500 (first: tick 200: estimator.encoder_position[3]: inf" in result.stdout, \
         result.stdout
