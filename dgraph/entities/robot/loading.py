@@ -73,7 +73,7 @@ def load_model(model: Any, entity: str | None = None) -> pin.Model:
                          "name: example-robot-data's, or a URDF path)", entity=entity)
     source = check_source(model, entity)
     try:
-        return _urdf_model(os.path.realpath(source)) if is_urdf_path(source) else load_robot(source).model
+        return _urdf_model(os.path.realpath(source)) if is_urdf_path(source) else describe_robot(source).model
     except Exception as exc:  # Pinocchio and example-robot-data raise plain exceptions
         raise ParamError(f"{prefix}cannot load robot model {model!r}: {exc}", entity=entity) from None
 
@@ -93,22 +93,78 @@ def package_dirs_of(urdf: str, extra: tuple[str, ...] = ()) -> list[str]:
 
 
 @functools.lru_cache(maxsize=8)
+def describe_robot(name: str) -> pin.RobotWrapper:
+    """An example-robot-data robot without its meshes: ``model`` (with the SRDF's reference
+    configurations and rotor parameters, as ``example_robot_data.load`` sets them), ``q0`` (its
+    reference posture) and ``urdf`` (the file), cached per process. Reading TALOS's meshes takes
+    ~0.6 s and parsing its kinematics 3 ms: the controller needs only the latter, a 3D view both
+    (:func:`load_robot` adds the meshes to this same model).
+
+    A loader that builds its model itself (a reduced model such as ``talos_legs``) is run as it is,
+    meshes included.
+    """
+    from example_robot_data.robots_loader import ROBOTS
+    from example_robot_data.utils import RobotLoader
+
+    loader = ROBOTS[name]
+    if loader.__init__ is not RobotLoader.__init__ or not loader.urdf_filename:
+        import example_robot_data as erd
+
+        return erd.load(name)
+    urdf, share = _loader_files(loader)
+    root = (pin.JointModelFreeFlyer(),) if loader.free_flyer else ()
+    model = pin.buildModelFromUrdf(urdf, *root)
+    robot = pin.RobotWrapper(model)
+    robot.urdf, robot.package_dir = urdf, share
+    robot.q0 = _read_srdf(loader, model) if loader.srdf_filename else pin.neutral(model)
+    if loader.free_flyer:  # as the loader bounds the free flyer's coordinates
+        model.upperPositionLimit[:7], model.lowerPositionLimit[:7] = 1.0, -1.0
+    return robot
+
+
+def _loader_files(loader: type) -> tuple[str, str]:
+    """The URDF file of an example-robot-data loader and the folder its ``package://`` paths start from."""
+    from example_robot_data.utils import getModelPath
+
+    relative = os.path.join(loader.path, loader.urdf_subpath, loader.urdf_filename)
+    robots = loader.model_path or getModelPath(relative)
+    return os.path.join(robots, relative), os.path.join(robots, "..", "..")
+
+
+def _read_srdf(loader: type, model: pin.Model) -> Any:
+    """Read the loader's SRDF into ``model`` (rotor parameters, armature, reference configurations);
+    return its reference posture."""
+    from example_robot_data.utils import readParamsFromSrdf
+
+    robots = os.path.dirname(os.path.dirname(os.path.dirname(_loader_files(loader)[0])))
+    srdf = os.path.join(robots, loader.path, loader.srdf_subpath, loader.srdf_filename)
+    return readParamsFromSrdf(model, srdf, False, loader.has_rotor_parameters, loader.ref_posture)
+
+
+@functools.lru_cache(maxsize=8)
 def load_robot(name: str) -> Any:
     """The model with its collision and visual geometry, cached per process and shared by every
-    entity that names the robot (the kinematics, the 3D view): reading TALOS's URDF and meshes
-    takes ~0.6 s, once. Only read, never changed.
+    entity that names the robot (the kinematics, the 3D view): reading TALOS's meshes takes
+    ~0.6 s, once, and only when something draws the robot. Only read, never changed.
 
-    ``name``: an example-robot-data name (``example_robot_data.load(name)``) or a URDF path (a
+    ``name``: an example-robot-data name (the meshes of :func:`describe_robot`'s model, or
+    ``example_robot_data.load(name)`` for a loader that builds its model itself) or a URDF path (a
     ``pinocchio.RobotWrapper``, meshes looked for as :func:`package_dirs_of` says; its ``model``
     is :func:`load_model`'s, so the URDF is parsed once).
     """
     if is_urdf_path(name):
         path = os.path.realpath(check_source(name))
-        model = _urdf_model(path)
-        dirs = package_dirs_of(path)
-        visual = pin.buildGeomFromUrdf(model, path, pin.GeometryType.VISUAL, package_dirs=dirs)
-        collision = pin.buildGeomFromUrdf(model, path, pin.GeometryType.COLLISION, package_dirs=dirs)
-        return pin.RobotWrapper(model, collision, visual)
-    import example_robot_data as erd
+        return _with_meshes(_urdf_model(path), path, package_dirs_of(path))
+    described = describe_robot(name)
+    if described.visual_model is not None:  # its loader read the meshes already
+        return described
+    robot = _with_meshes(described.model, described.urdf, [described.package_dir])
+    robot.urdf, robot.q0 = described.urdf, described.q0
+    return robot
 
-    return erd.load(name)
+
+def _with_meshes(model: pin.Model, urdf: str, package_dirs: list[str]) -> pin.RobotWrapper:
+    """``model`` with the visual and collision geometry of its URDF."""
+    visual = pin.buildGeomFromUrdf(model, urdf, pin.GeometryType.VISUAL, package_dirs=package_dirs)
+    collision = pin.buildGeomFromUrdf(model, urdf, pin.GeometryType.COLLISION, package_dirs=package_dirs)
+    return pin.RobotWrapper(model, collision, visual)

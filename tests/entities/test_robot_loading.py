@@ -1,0 +1,41 @@
+"""describe_robot: an example-robot-data model without its meshes, the same as the loader's."""
+
+import example_robot_data as erd
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from dgraph.entities.robot.loading import describe_robot, load_model, load_robot
+
+MODEL_ARRAYS = ("armature", "rotorInertia", "rotorGearRatio", "effortLimit", "velocityLimit",
+                "lowerPositionLimit", "upperPositionLimit")
+
+
+@pytest.mark.parametrize("name", ["talos", "panda", "ur5", "talos_legs"])
+def test_the_model_without_meshes_is_the_loaders_model(name):
+    described, loaded = describe_robot(name), erd.load(name)
+    model, reference = described.model, loaded.model
+    assert list(model.names) == list(reference.names) and model.nq == reference.nq
+    for field in MODEL_ARRAYS:  # the SRDF's rotor parameters (armature) and the free flyer's bounds
+        np.testing.assert_array_equal(getattr(model, field), getattr(reference, field), err_msg=field)
+    assert [c.key() for c in model.referenceConfigurations] == [c.key() for c in reference.referenceConfigurations]
+    np.testing.assert_array_equal(described.q0, loaded.q0)
+    assert described.urdf == loaded.urdf
+    q = pin.randomConfiguration(reference)
+    np.testing.assert_allclose(pin.crba(model, model.createData(), q), pin.crba(reference, reference.createData(), q),
+                               atol=1e-12)
+
+
+def test_the_kinematics_read_no_mesh_and_the_3d_view_adds_them_to_the_same_model():
+    assert describe_robot("talos").visual_model is None  # 3 ms of URDF instead of 0.6 s of meshes
+    robot = load_robot("talos")
+    assert robot.model is load_model("talos") is describe_robot("talos").model
+    reference = erd.load("talos")
+    names = [g.name for g in robot.visual_model.geometryObjects]
+    assert names == [g.name for g in reference.visual_model.geometryObjects]
+    np.testing.assert_array_equal(robot.q0, reference.q0)
+
+
+def test_a_loader_that_builds_its_own_model_is_run_as_it_is():
+    legs = describe_robot("talos_legs")  # a model reduced by its loader: meshes included
+    assert legs.visual_model is not None and load_robot("talos_legs") is legs
