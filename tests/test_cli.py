@@ -437,3 +437,21 @@ def test_serve_keeps_serving_a_web_viewer_that_draws_the_recording_until_ctrl_c(
             run.wait()
         run.stdout.close()
         run.stderr.close()
+
+
+def test_run_and_profile_share_their_options_and_every_command_its_file_argument():
+    import argparse
+
+    from dgraph.cli import build_parser
+
+    commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
+
+    def options(command):
+        return {name: action.help for action in commands[command]._actions for name in action.option_strings}
+
+    shared = ("--duration", "--ticks", "--set")
+    assert {k: options("run")[k] for k in shared} == {k: options("profile")[k] for k in shared}
+    for command in ("run", "check", "profile", "show"):
+        assert [a.dest for a in commands[command]._actions if not a.option_strings] == ["file"], command
+    assert {"--save", "--serve", "--spawn", "--no-rerun", "--bind", "--port", "--web-viewer-port",
+            "--keep-serving", "--video"} <= set(options("run")) and "--save" not in options("profile")
