@@ -38,6 +38,7 @@ from dgraph.entities.robot.loading import check_source
 from dgraph_sim.camera import RobotCamera
 from dgraph_sim.disturbances import Removals
 from dgraph_sim.model import SimModel, load
+from dgraph_sim.robots import MJCF_TOLERANCE, MjcfError
 from dgraph_sim.scenes import SCENES
 from dgraph_sim.video import VideoError, VideoWriter, check_video, log_video
 from dgraph_sim.viewer import PassiveViewer, ViewerError
@@ -115,6 +116,15 @@ class MujocoDevice(dg.Device):
     ``leg_left_6_joint``, ``leg_right_6_joint``, ``wrist_left_ft_link``, ``wrist_right_ft_link``;
     the IMU is at ``imu_link`` (on ``torso_2_link``).
 
+    ``mjcf``: the path of an MJCF file describing the same robot for MuJoCo (tuned contacts,
+    actuators, meshes MuJoCo cannot read from the URDF) while Pinocchio keeps ``model``; in a
+    graph file a relative path is taken from the file's folder, in Python (and ``--set``) from
+    the working directory. Joints are matched by name, actuators are the MJCF's motors (gear 1)
+    or, if it has none, motors with the URDF effort limits; the masses, mass matrix and gravity
+    torques must agree with Pinocchio's within ``mjcf_tolerance`` (relative), else the device is
+    refused naming ``mjcf`` and the joint (:func:`dgraph_sim.robots.mjcf_spec`,
+    :func:`dgraph_sim.robots.compare_dynamics`).
+
     ``viewer: true`` opens an interactive MuJoCo window (``mujoco.viewer.launch_passive``) synced
     at ``viewer_fps`` and paced to the wall clock (:mod:`dgraph_sim.viewer`); it needs a display
     (``DISPLAY`` or ``WAYLAND_DISPLAY``), else the device is refused with a ``ParamError``.
@@ -123,6 +133,10 @@ class MujocoDevice(dg.Device):
     model = dg.Param("talos", kind="str", doc="example-robot-data robot name (talos, panda, ur5...) or URDF path")
     package_dirs = dg.Param([], kind="str_list", doc="folders holding the packages of a URDF's package:// meshes "
                             "(besides the URDF's folder and its ancestors)")
+    mjcf = dg.Param(None, kind="path", doc="MJCF file describing the robot for MuJoCo (Pinocchio keeps model); "
+                    "joints matched by name, masses checked (in a graph file, relative to its folder)")
+    mjcf_tolerance = dg.Param(MJCF_TOLERANCE, kind="float", minimum=0.0, doc="relative tolerance of the check "
+                              "that the MJCF and the Pinocchio model have the same masses and inertias")
     scene = dg.Param("flat", kind="str", choices=tuple(SCENES), doc="scene (dgraph_sim.scenes)")
     collisions = dg.Param("all", kind="str", choices=("feet", "all"),
                           doc="robot geoms touching the scene: every collision mesh (never each other), or soles only")
@@ -172,8 +186,14 @@ class MujocoDevice(dg.Device):
         """Load the model (cached per process), size the ports, declare the sensor states the robot
         has and the wrench inputs."""
         check_source(self.model, self.name)
+        if self.mjcf is not None and self.collisions != "all":
+            raise dg.ParamError(f"{self.name}: parameter 'collisions': {self.collisions!r} applies to a robot built "
+                                "from its URDF; with mjcf the MJCF's contacts are used as written", entity=self.name)
         try:
-            self.sim: SimModel = load(self.model, self.scene, 0.001, self.collisions, tuple(self.package_dirs))
+            self.sim: SimModel = load(self.model, self.scene, 0.001, self.collisions, tuple(self.package_dirs),
+                                      self.mjcf, self.mjcf_tolerance)
+        except MjcfError as exc:  # the MJCF does not describe the robot of the Pinocchio model
+            raise dg.ParamError(f"{self.name}: parameter 'mjcf': {exc}", entity=self.name) from None
         except ValueError as exc:  # a mesh not found, a joint MuJoCo cannot mirror
             raise dg.ParamError(f"{self.name}: parameter 'model': cannot build {self.model!r}: {exc}",
                                 entity=self.name) from None

@@ -6,6 +6,7 @@ own ``MjData``) and must not modify it.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -14,7 +15,7 @@ import mujoco
 import numpy as np
 
 from dgraph_sim.conventions import JointMap
-from dgraph_sim.robots import RobotInfo, robot_spec
+from dgraph_sim.robots import MJCF_TOLERANCE, MjcfError, RobotInfo, compare_dynamics, robot_spec
 from dgraph_sim.scenes import add_scene
 
 
@@ -51,18 +52,44 @@ def _sensor_adr(m: mujoco.MjModel, name: str) -> int:
     return int(m.sensor_adr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SENSOR, name)])
 
 
-@lru_cache(maxsize=16)
 def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collisions: str = "all",
-         package_dirs: tuple[str, ...] = ()) -> SimModel:
+         package_dirs: tuple[str, ...] = (), mjcf: str | None = None,
+         mjcf_tolerance: float = MJCF_TOLERANCE) -> SimModel:
     """Build (once per process and arguments) the MuJoCo model of ``robot`` (an example-robot-data
-    name or a URDF path, :func:`dgraph_sim.robots.robot_spec`) in ``scene``."""
+    name or a URDF path, :func:`dgraph_sim.robots.robot_spec`) in ``scene``.
+
+    ``mjcf``: an MJCF file describing the robot for MuJoCo (:func:`dgraph_sim.robots.mjcf_spec`;
+    relative: to the working directory), checked against the Pinocchio model of ``robot`` by
+    :func:`dgraph_sim.robots.compare_dynamics` with ``mjcf_tolerance``; a mismatch raises
+    :class:`~dgraph_sim.robots.MjcfError`. The cache knows the file by its real path, size and
+    modification time, so an edited file is read again."""
+    stamp = None
+    if mjcf is not None:
+        mjcf = os.path.realpath(mjcf)
+        try:
+            status = os.stat(mjcf)
+        except OSError as exc:
+            raise MjcfError(f"cannot read {mjcf}: {exc.strerror}") from None
+        stamp = (status.st_size, status.st_mtime_ns)
+    return _load(robot, scene, dt, collisions, tuple(package_dirs), mjcf, stamp, float(mjcf_tolerance))
+
+
+@lru_cache(maxsize=16)
+def _load(robot: str, scene: str, dt: float, collisions: str, package_dirs: tuple[str, ...], mjcf: str | None,
+          stamp: tuple[int, int] | None, mjcf_tolerance: float) -> SimModel:
+    """:func:`load`, cached (``stamp``: the MJCF's size and modification time, a key only)."""
     if not (dt > 0.0 and np.isfinite(dt)):
         raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
-    spec, info = robot_spec(robot, dt, collisions, tuple(package_dirs))
+    spec, info = robot_spec(robot, dt, collisions, tuple(package_dirs), mjcf)
     add_scene(spec, scene, tracked_body=info.base_body)
     # NaN must reach our divergence check instead of MuJoCo silently resetting the state
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
-    m = spec.compile()
+    try:
+        m = spec.compile()
+    except ValueError as exc:
+        if mjcf is None:
+            raise
+        raise MjcfError(f"{mjcf}: MuJoCo cannot compile it in scene {scene!r}: {exc}") from None
     imu = info.imu
     sensors = SensorLayout(
         imu_quat=None if imu is None else _sensor_adr(m, f"{imu.site}_quat"),
@@ -78,4 +105,12 @@ def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collision
     if ids != list(range(ids[0], ids[-1] + 1)):
         raise ValueError(f"the bodies of {robot} are not contiguous in the MuJoCo model")
     bodies = slice(ids[0], ids[-1] + 1)
-    return SimModel(m, info.pin_model, JointMap(info.pin_model, m), info, sensors, bodies)
+    try:
+        joint_map = JointMap(info.pin_model, m)
+    except ValueError as exc:
+        if mjcf is None:
+            raise
+        raise MjcfError(f"{mjcf}: {exc}") from None
+    if mjcf is not None:
+        compare_dynamics(m, joint_map, info.pin_model, info.q0, mjcf_tolerance, mjcf)
+    return SimModel(m, info.pin_model, joint_map, info, sensors, bodies)
