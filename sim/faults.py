@@ -15,7 +15,8 @@ through, as a real sensor would), so what it tests is how the readers cope.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -42,6 +43,11 @@ class SensorFault(dg.Entity):
     ticks = dg.Param(1, kind="int", minimum=1, doc="length of the window in ticks")
     indices = dg.Param([], kind="int_list", doc="elements at fault (flattened; empty: all)")
     magnitude = dg.Param(1.0, kind="float", doc="jump added to the reading, or the sign of inf")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, kind: Literal["nan", "inf", "frozen", "jump"], start: float = 0.0, ticks: int = 1,
+            indices: Sequence[int] = (), magnitude: float = 1.0,
+        ) -> None: ...
 
     reading = dg.Input(shape=None, doc="the sensor reading")
     frozen_value = dg.State(shape=None, finite=False, doc="the reading at the window's first tick")

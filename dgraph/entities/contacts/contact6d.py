@@ -3,6 +3,8 @@ the 6D wrench in their exact wrench cone."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Literal
+
 import numpy as np
 import pinocchio as pin
 
@@ -126,6 +128,12 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
     force_weight = dg.Param(1e-5, kind="float", minimum=0.0, doc="weight of ||f||^2 in the cost")
     forces = dg.Param("corners", kind="str", choices=("corners", "wrench"),
                       doc="force variables: the 4 corner forces, or the 6D wrench in their wrench cone")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, frame: str, front: float = 0.1, back: float = 0.11, half_width: float = 0.069,
+            mu: float = 0.3, min_normal_force: float = 1.0, max_normal_force: float = 1000.0,
+            force_weight: float = 1e-05, forces: Literal["corners", "wrench"] = "corners",
+        ) -> None: ...
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
     kp = dg.Input(default=0.0, minimum=0.0, doc="drift-correction stiffness (scalar or 6)")

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 import dgraph as dg
 from dgraph.control.contact import ContactConstraint
@@ -61,6 +64,11 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
     min_normal_force = dg.Param(0.0, kind="float", minimum=0.0, doc="minimum normal force (N)")
     max_normal_force = dg.Param(200.0, kind="float", minimum=0.0, doc="maximum normal force (N)")
     force_weight = dg.Param(1e-5, kind="float", minimum=0.0, doc="weight of ||f - f*||^2 in the cost")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, frame: str, normal: ArrayLike = (0.0, 0.0, 1.0), mu: float = 0.5,
+            min_normal_force: float = 0.0, max_normal_force: float = 200.0, force_weight: float = 1e-05,
+        ) -> None: ...
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
     kp = dg.Input(default=0.0, minimum=0.0, doc="anchor stiffness (scalar or 3)")

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any, Literal
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 import dgraph as dg
 from dgraph.entities.discrete.configuration_integrator import integration_step
@@ -32,6 +35,11 @@ class KinematicDevice(dg.Device):
     q0 = dg.Param(None, kind="vector", doc="initial configuration (default: neutral / zeros)")
     v0 = dg.Param(None, kind="vector", doc="initial velocity (default: zeros)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, control_mode: Literal["velocity", "acceleration"] = "velocity", size: int | None = None,
+            model: Any = None, q0: ArrayLike | None = None, v0: ArrayLike | None = None, dt: float | None = None,
+        ) -> None: ...
 
     control = dg.Input(shape=("nv",), doc="commanded velocity or acceleration")
     q = dg.State(shape=("nq",), doc="configuration")

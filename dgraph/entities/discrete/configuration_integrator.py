@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import NamedTuple
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
 import numpy as np
 
@@ -62,6 +62,11 @@ class ConfigurationIntegrator(dg.Entity):
                             doc="velocity: integrate once (IK); acceleration: twice (TSID position)")
     sync_period = dg.Param(0, kind="int", minimum=0, doc="re-synchronise every N ticks (0: only at tick 0)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: Any = "talos", control_mode: Literal["velocity", "acceleration"] = "velocity",
+            sync_period: int = 0, dt: float | None = None,
+        ) -> None: ...
 
     command = dg.Input(shape=("nv",), doc="the QP's velocity or acceleration")
     measured_q = dg.Input(shape=("nq",), doc="measured (estimated) configuration")

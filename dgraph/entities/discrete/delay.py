@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+from numpy.typing import ArrayLike
+
 import dgraph as dg
 from dgraph.entities.discrete.state_shape import initial_state, state_shape
 from dgraph.params import MAX_SIZE
@@ -18,6 +22,8 @@ class Delay(dg.Entity):
     has_state = True
     size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
     initial = dg.Param(None, kind="vector", doc="output before the first tick (default 0)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, size: int | None = None, initial: ArrayLike | None = None) -> None: ...
     input = dg.Input(shape=state_shape)
     output = dg.State(shape=state_shape, doc="the input of the previous tick")
 

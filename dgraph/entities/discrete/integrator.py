@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+from numpy.typing import ArrayLike
+
 import dgraph as dg
 from dgraph.entities.discrete.state_shape import initial_state, state_shape
 from dgraph.params import MAX_SIZE
@@ -19,6 +23,10 @@ class Integrator(dg.Entity):
     size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
     initial = dg.Param(None, kind="vector", doc="initial value (default 0)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, size: int | None = None, initial: ArrayLike | None = None, dt: float | None = None,
+        ) -> None: ...
     input = dg.Input(shape=state_shape, doc="the derivative")
     output = dg.State(shape=state_shape, doc="the integral")
 

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -127,6 +128,13 @@ class EnergyTank(dg.Entity):
     enabled = dg.Param(True, kind="bool", doc="false: compute and record, but leave the solver plain")
     clamp = dg.Param(True, kind="bool", doc="keep E in [E_min, E_max], summing the correction")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, tasks: Sequence[str] = (), contacts: Sequence[str] = (), maximum_energy: float = 5.0,
+            minimum_energy: float = 0.1, initial_energy: float = 3.0, power_low: float = -0.5, band: float = 0.1,
+            inertia: Literal["per_task", "stacked"] = "per_task", enabled: bool = True, clamp: bool = True,
+            dt: float | None = None,
+        ) -> None: ...
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
     solution = dg.Input(dtype=QPSolution, doc="the solver's solution (tau, contacts, forces), read after the solve")

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 import dgraph as dg
 
@@ -31,6 +34,11 @@ class ContactDetector(dg.Entity):
     on_time = dg.Param(0.01, kind="float", minimum=0.0, doc="dwell before a contact is made (s)")
     off_time = dg.Param(0.05, kind="float", minimum=0.0, doc="dwell before a contact is lost (s)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, normal: ArrayLike = (0.0, 0.0, 1.0), on_force: float = 5.0, off_force: float = 2.0,
+            on_time: float = 0.01, off_time: float = 0.05, dt: float | None = None,
+        ) -> None: ...
 
     force = dg.Input(shape=(3,), doc="measured force on the robot (N, world)")
     phase = dg.State(shape=(), dtype="int", initial=APPROACHING, doc="0 approaching, 1 in contact, 2 lost")

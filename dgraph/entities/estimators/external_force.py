@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -64,6 +64,11 @@ class ExternalForce(FrameReader, dg.Entity):
                                                              "frozen (0: no test)")
     stale_ticks = dg.Param(20, kind="int", minimum=0, doc="ticks without an update of the sensor's source state "
                                                            "that make it stale (0: no test)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, frame: str, payload_mass: float | None = None, check_sensors: bool = True,
+            force_range: float = 10000.0, torque_range: float = 1000.0, frozen_ticks: int = 50, stale_ticks: int = 20,
+        ) -> None: ...
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
     wrench = dg.Input(shape=(6,), doc="sensor reading [force, torque], sensor frame")
 

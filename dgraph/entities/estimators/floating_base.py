@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 import dgraph as dg
 from dgraph.entities.estimators.leg_odometry import (
@@ -169,6 +171,17 @@ class FloatingBaseEstimator(dg.Entity):
     accelerometer_range = dg.Param(160.0, kind="float", minimum=0.0, doc="accelerometer range (m/s2)")
     force_range = dg.Param(10000.0, kind="float", minimum=0.0, doc="F/T force range (N)")
     torque_range = dg.Param(1000.0, kind="float", minimum=0.0, doc="F/T torque range (N m)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: Any = "talos",
+            foot_frames: Sequence[str] = ("left_sole_link", "right_sole_link"),
+            ft_frames: Sequence[str] = ("leg_left_6_joint", "leg_right_6_joint"), imu_frame: str | None = None,
+            contact_force_on: float = 100.0, contact_force_off: float = 50.0, cutoff_frequency: float = 1.0,
+            q0: ArrayLike | None = None, dt: float | None = None, check_sensors: bool = True, frozen_ticks: int = 50,
+            stale_ticks: int = 20, joint_limit_margin: float = 0.1, encoder_step: float = 0.01,
+            encoder_velocity_step: float = 5.0, gyro_range: float = 35.0, gyro_step: float = 2.0,
+            accelerometer_range: float = 160.0, force_range: float = 10000.0, torque_range: float = 1000.0,
+        ) -> None: ...
 
     imu_orientation = dg.Input(shape=(4,), doc="quaternion [x, y, z, w] of the IMU frame in the world")
     imu_angular_velocity = dg.Input(shape=(3,), doc="gyro, IMU frame (rad/s)")

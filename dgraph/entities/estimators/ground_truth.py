@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import dgraph as dg
 
@@ -19,6 +19,8 @@ class GroundTruthEstimator(dg.Entity):
 
     nq = dg.Param(39, kind="int", minimum=1, maximum=10_000, doc="configuration size")
     nv = dg.Param(38, kind="int", minimum=1, maximum=10_000, doc="velocity size")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, nq: int = 39, nv: int = 38) -> None: ...
 
     q_true = dg.Input(shape=("nq",), doc="true configuration (Pinocchio conventions)")
     v_true = dg.Input(shape=("nv",), doc="true velocity (Pinocchio conventions)")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 import dgraph as dg
@@ -22,6 +24,8 @@ class AngularMomentum(Feature):
     Inputs: ``robot``, ``reference`` (3, default 0: the benchmark regulates k to 0),
     ``reference_rate`` (3, default 0).
     """
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str) -> None: ...
 
     reference = dg.Input(shape=(3,), default=np.zeros(3), doc="k*")
     reference_rate = dg.Input(shape=(3,), default=np.zeros(3), doc="k_dot*")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 import dgraph as dg
@@ -23,6 +25,8 @@ class CenterOfMass(Feature):
     """
 
     mask = dg.Param("111", kind="str", doc="rows kept, over x y z")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, mask: str = "111") -> None: ...
 
     reference_position = dg.Input(shape=(3,), doc="c*")
     reference_velocity = dg.Input(shape=(3,), default=np.zeros(3), doc="c_dot*")

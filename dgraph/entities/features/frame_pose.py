@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pinocchio as pin
 
@@ -32,6 +34,8 @@ class FramePose(FrameReader, Feature):
 
     frame = dg.Param(kind="str", doc="frame name in the robot model")
     mask = dg.Param("111111", kind="str", doc="rows kept, over x y z rx ry rz (world axes)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, frame: str, mask: str = "111111") -> None: ...
 
     reference_position = dg.Input(shape=(3,), default=np.zeros(3), doc="p*")
     reference_orientation = dg.Input(shape=(4,), default=np.array([0.0, 0.0, 0.0, 1.0]), doc="R* as xyzw")

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 import dgraph as dg
@@ -30,6 +33,11 @@ class JointPosture(Feature):
     model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the ports)")
     joints = dg.Param((), kind="str_list", doc="joint names (default: every 1-dof joint)")
     reference_configuration = dg.Param("half_sitting", kind="str", doc="named configuration used as default")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: Any = "talos", joints: Sequence[str] = (),
+            reference_configuration: str = "half_sitting",
+        ) -> None: ...
 
     def configure(self) -> None:
         """Resolve the joints and declare the inputs sized by them."""

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 import scipy.linalg
 
@@ -65,6 +68,13 @@ class HierarchicalInverseDynamics(StackCommands, TorqueSolver):
     rank_tolerance = dg.Param(1e-9, kind="float", minimum=0.0, doc="relative rank threshold of the cascade")
     closed_form = dg.Param(True, kind="bool", doc="solve a level in closed form when no inequality binds")
     constraint_tolerance = dg.Param(1e-6, kind="float", minimum=0.0, doc="largest residual of the fixed level")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: Any = "talos", tasks: Sequence[str] = (), contacts: Sequence[str] = (),
+            max_iterations: int = 1000, acceleration_weight: float = 1e-06, fallback_damping: float = 1.0,
+            priorities: Sequence[int] = (), eps_abs: float = 1e-08, rank_tolerance: float = 1e-09,
+            closed_form: bool = True, constraint_tolerance: float = 1e-06,
+        ) -> None: ...
 
     def configure(self) -> None:
         """The ports of a torque solver, the stack and the cascade."""

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 import dgraph as dg
@@ -56,6 +59,11 @@ class HierarchicalSolver(StackCommands, SolverReport, dg.Entity):
     max_iterations = dg.Param(1000, kind="int", minimum=1, doc="ProxQP iteration limit")
     rank_tolerance = dg.Param(1e-9, kind="float", minimum=0.0, doc="relative singular-value threshold")
     closed_form = dg.Param(True, kind="bool", doc="solve a level in closed form when no inequality binds")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: Any = "talos", tasks: Sequence[str] = (), priorities: Sequence[int] = (),
+            eps_abs: float = 1e-08, max_iterations: int = 1000, rank_tolerance: float = 1e-09, closed_form: bool = True,
+        ) -> None: ...
 
     def configure(self) -> None:
         """Size ``v``, declare the task inputs and the stack."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 import dgraph as dg
@@ -35,6 +37,10 @@ class JointLimits(Activatable, dg.Entity):
     model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the rows)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="integration period in s (default: the graph's dt)")
     velocity_scale = dg.Param(1.0, kind="float", minimum=0.0, doc="fraction of the velocity limits allowed")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: Any = "talos", dt: float | None = None, velocity_scale: float = 1.0,
+        ) -> None: ...
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 import dgraph as dg
@@ -41,6 +43,8 @@ class VelocityTask(Activatable, dg.Entity):
     """
 
     adaptive = dg.Param(False, kind="bool", doc="use SoT's adaptive gain instead of a constant gain")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, adaptive: bool = False) -> None: ...
 
     feature = dg.Input(dtype=FeatureValue, doc="the feature's value (error, rate, Jacobian)")
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's state the feature was evaluated at (for J v)")

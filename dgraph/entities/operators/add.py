@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+from numpy.typing import ArrayLike
 
 import dgraph as dg
 from dgraph.entities.operators.shape import vector_shape
@@ -21,6 +23,10 @@ class Add(dg.Entity):
     n_inputs = dg.Param(2, kind="int", minimum=1, maximum=MAX_PORTS, doc="number of summed inputs")
     coefficients = dg.Param(None, kind="vector", doc="weight of each input (default: all 1)")
     size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, n_inputs: int = 2, coefficients: ArrayLike | None = None, size: int | None = None,
+        ) -> None: ...
 
     def configure(self) -> None:
         """Declare the inputs ``in0 .. in{n-1}`` and check the coefficients."""

@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 import dgraph as dg
 
@@ -18,6 +19,8 @@ class Constant(dg.Entity):
     """
 
     value = dg.Param(kind="vector", doc="the constant (number, vector or matrix)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, value: ArrayLike) -> None: ...
 
     def configure(self) -> None:
         """Store the value as a float for a scalar, an array otherwise."""

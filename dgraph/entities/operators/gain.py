@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -21,6 +21,8 @@ class Gain(dg.Entity):
     """
 
     size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, size: int | None = None) -> None: ...
     input = dg.Input(shape=vector_shape, doc="the signal to scale")
     gain = dg.Input(shape=None, default=1.0, doc="scalar, diagonal (vector) or matrix gain")
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,6 +20,8 @@ class Saturation(dg.Entity):
     """
 
     size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, size: int | None = None) -> None: ...
     input = dg.Input(shape=vector_shape)
     lower = dg.Input(shape=None, default=-np.inf, doc="lower bound (scalar or vector)")
     upper = dg.Input(shape=None, default=np.inf, doc="upper bound (scalar or vector)")

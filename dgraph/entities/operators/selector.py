@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,6 +21,8 @@ class Selector(dg.Entity):
 
     size = dg.Param(kind="int", minimum=1, maximum=MAX_SIZE, doc="size of the input vector")
     indices = dg.Param(kind="int_list", doc="indices of the kept components")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, size: int, indices: Sequence[int]) -> None: ...
     input = dg.Input(shape=("size",))
 
     def configure(self) -> None:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import dgraph as dg
 from dgraph.entities.operators.shape import vector_shape
@@ -19,6 +19,8 @@ class Switch(dg.Entity):
 
     n_inputs = dg.Param(2, kind="int", minimum=1, maximum=MAX_PORTS, doc="number of inputs")
     size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="vector size (None: scalar)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, n_inputs: int = 2, size: int | None = None) -> None: ...
     selection = dg.Input(shape=(), dtype="int", default=0, doc="index of the routed input")
 
     def configure(self) -> None:

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 import dgraph as dg
 
@@ -43,6 +44,11 @@ class MinimumJerk(dg.Entity):
     start = dg.Param(0.0, kind="float", minimum=0.0, maximum=1e9, doc="time at which the move starts, in s")
     initial = dg.Param(None, kind="vector", doc="initial value (default: the input current at start)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, target: ArrayLike, duration: float, start: float = 0.0,
+            initial: ArrayLike | None = None, dt: float | None = None,
+        ) -> None: ...
 
     current = dg.Input(shape=lambda self: self.value_shape, doc="value sampled at the start tick")
     origin = dg.State(shape=lambda self: self.value_shape, doc="the initial value of the move, once started")

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 import dgraph as dg
 
@@ -34,6 +35,11 @@ class Sinusoid(dg.Entity):
     offset = dg.Param(0.0, kind="vector", doc="offset (scalar or per component)")
     ramp = dg.Param(0.0, kind="float", minimum=0.0, doc="fade-in duration of the amplitude in s (0: none)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, amplitude: ArrayLike, frequency: ArrayLike, phase: ArrayLike = 0.0,
+            offset: ArrayLike = 0.0, ramp: float = 0.0, dt: float | None = None,
+        ) -> None: ...
 
     def configure(self) -> None:
         """Broadcast the parameters to a common shape; a frequency and a phase shared by every

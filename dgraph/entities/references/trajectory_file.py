@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -198,6 +199,11 @@ class TrajectoryFile(dg.Entity):
     interpolation = dg.Param("cubic", kind="str", choices=("linear", "cubic"), doc="interpolation in time")
     start = dg.Param(0.0, kind="float", minimum=-1e9, maximum=1e9, doc="graph time (s) at which file time 0 is played")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, path: str, layout: Literal["p", "pv", "pva"] = "p",
+            interpolation: Literal["linear", "cubic"] = "cubic", start: float = 0.0, dt: float | None = None,
+        ) -> None: ...
 
     def configure(self) -> None:
         """Read and check the file; precompute what the interpolation needs."""

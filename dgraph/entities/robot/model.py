@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
@@ -95,6 +96,10 @@ class RobotModel(dg.Entity):
     model = dg.Param("talos", kind="object", doc="example-robot-data robot name, URDF path or pinocchio.Model")
     frames = dg.Param((), kind="str_list", doc="frames whose placement, velocity, Jacobian and drift are outputs")
     tool_frames = dg.Param(None, kind="object", doc="extra frames: {name: {parent: frame, translation: [x, y, z]}}")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: Any = "talos", frames: Sequence[str] = (), tool_frames: Any = None,
+        ) -> None: ...
 
     q = dg.Input(shape=("nq",), doc="configuration (Pinocchio convention)")
     v = dg.Input(shape=("nv",), doc="generalized velocity (Pinocchio convention)")

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
 import dgraph as dg
 from dgraph.control.equation import TaskEquation
 from dgraph.control.inverse_dynamics import DEFAULT_EPS_ABS, InverseDynamicsQP, TaskRowsError
@@ -54,6 +57,12 @@ class InverseDynamicsSolver(TorqueSolver):
     eps_abs = dg.Param(DEFAULT_EPS_ABS, kind="float", minimum=1e-12, maximum=1e-3,
                        doc="ProxQP absolute tolerance (also the torque-limit margin)")
     passive = dg.Param(False, kind="bool", doc="declare a passivity input (an energy tank's, Eq. 5.34)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: Any = "talos", tasks: Sequence[str] = (), contacts: Sequence[str] = (),
+            max_iterations: int = 1000, acceleration_weight: float = 1e-06, fallback_damping: float = 1.0,
+            eps_abs: float = 1e-06, passive: bool = False,
+        ) -> None: ...
 
     def configure(self) -> None:
         """The ports of a torque solver, the QP, and the passivity input in passive mode."""

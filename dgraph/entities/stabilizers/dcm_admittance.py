@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 import dgraph as dg
@@ -44,6 +46,11 @@ class DcmAdmittance(dg.Entity):
     max_offset = dg.Param(0.05, kind="float", minimum=0.0, doc="bound of the CoM correction per axis (m)")
     integral_limit = dg.Param(0.1, kind="float", minimum=0.0, doc="bound of the DCM error integral (m s)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, height: float = 0.0, max_offset: float = 0.05, integral_limit: float = 0.1,
+            dt: float | None = None,
+        ) -> None: ...
 
     reference_position = dg.Input(shape=(3,), doc="planned CoM c_ref")
     reference_velocity = dg.Input(shape=(3,), default=np.zeros(3), doc="planned CoM velocity")

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 import dgraph as dg
@@ -59,6 +62,12 @@ class ZmpEstimator(dg.Entity):
     compensate_feet = dg.Param(True, kind="bool", doc="add the weight of the body below each sensor")
     height = dg.Param(0.0, kind="float", doc="height of the ground plane (m)")
     min_normal_force = dg.Param(10.0, kind="float", minimum=0.0, doc="below it the ZMP is undefined (N)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, sensors: Sequence[str] = ("ft_left_ankle", "ft_right_ankle"),
+            frames: Sequence[str] = ("leg_left_6_joint", "leg_right_6_joint"), compensate_feet: bool = True,
+            height: float = 0.0, min_normal_force: float = 10.0,
+        ) -> None: ...
 
     robot = dg.Input(dtype=RobotState, doc="a RobotModel's state (measured configuration)")
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 import dgraph as dg
@@ -32,6 +34,10 @@ class ForceTask(dg.Entity):
     size = dg.Param(3, kind="int", minimum=1, maximum=6, doc="3 (force) or 6 (wrench)")
     integral_limit = dg.Param(20.0, kind="float", minimum=0.0, doc="largest |I_F integral| per axis (N)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, size: int = 3, integral_limit: float = 20.0, dt: float | None = None,
+        ) -> None: ...
 
     reference = dg.Input(shape=("size",), doc="F*: desired force on the robot")
     measured = dg.Input(shape=("size",), doc="F_ext: measured force on the robot")

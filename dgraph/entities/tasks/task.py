@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 import dgraph as dg
@@ -41,6 +43,8 @@ class Task(dg.Entity):
     """
 
     critical_damping = dg.Param(False, kind="bool", doc="use Kd = 2 sqrt(Kp) instead of a kd input")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(self, name: str, *, critical_damping: bool = False) -> None: ...
 
     feature = dg.Input(dtype=FeatureValue, doc="the feature's value (error, rate, Jacobian, drift)")
     kp = dg.Input(default=0.0, minimum=0.0, doc="proportional gain (scalar or per row)")
