@@ -58,8 +58,8 @@ def check_video(path: str | os.PathLike[str], size: tuple[int, int] | list[int])
         try:
             import av  # noqa: F401
         except ImportError:
-            raise VideoError(f"{str(path)!r}: writing an .mp4 needs PyAV (pip install "dgraph[video]" or av); .gif, .webp and .png "
-                             "need only Pillow") from None
+            raise VideoError(f"{str(path)!r}: writing an .mp4 needs PyAV (pip install 'dgraph[video]'); "
+                             ".gif, .webp and .png need only Pillow") from None
     if path.is_dir():
         raise VideoError(f"{str(path)!r} is a directory")
     parent = path.parent
