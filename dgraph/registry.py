@@ -14,7 +14,7 @@ from __future__ import annotations
 import difflib
 from collections.abc import Callable
 from importlib.metadata import entry_points
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, TypeVar, overload
 
 from dgraph.errors import RegistryError
 
@@ -30,6 +30,14 @@ _TRIED: set[tuple[str, str]] = set()
 """The ``(name, module)`` of every entry point whose import was attempted (once each)."""
 _FAILED: dict[str, tuple[str, Exception]] = {}
 """Each plugin that failed to load, by entry-point name: what to report, and its own exception."""
+
+
+@overload
+def register(cls: E, *, name: str | None = None) -> E: ...
+
+
+@overload
+def register(cls: None = None, *, name: str | None = None) -> Callable[[E], E]: ...
 
 
 def register(cls: E | None = None, *, name: str | None = None) -> E | Callable[[E], E]:
