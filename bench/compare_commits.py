@@ -8,7 +8,8 @@ view writing an .rrd into a temporary directory). Each commit is checked out wit
 ``git worktree add --detach`` in a temporary directory (``--head WORKTREE``: this checkout as it
 is, uncommitted changes included, run in place), and every run is a fresh process of this venv's
 python with its cwd and ``PYTHONPATH`` set to that worktree, so it imports that commit's
-``dgraph`` and ``sim`` and loads that commit's graph file (the run checks ``dgraph.__file__``).
+``dgraph`` and ``sim`` (also as ``dgraph_sim``: :data:`CHECKOUT_IMPORTS`) and loads that commit's
+graph file (the run checks where ``dgraph`` and ``dgraph_sim`` came from).
 
 A run loads the graph, runs ``--warmup`` ticks, then times ``--ticks`` ticks plus closing the
 graph (which flushes the recording): real-time factor = simulated time / wall time. Runs
@@ -35,9 +36,30 @@ from calibration import calibrate, calibration_line, single_threaded_env
 
 ROOT = Path(__file__).resolve().parents[1]
 WORKTREE = "WORKTREE"
-DRIVER = r"""
+CHECKOUT_IMPORTS = r"""
+import importlib, importlib.abc, importlib.util, sys
+
+class _SimAlias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    # dgraph_sim.X is this checkout's sim.X (the installed dgraph_sim is the main checkout's sim/
+    # folder, and older commits import their simulation part as sim): one module per file
+    def find_spec(self, name, path=None, target=None):
+        if name == "dgraph_sim" or name.startswith("dgraph_sim."):
+            return importlib.util.spec_from_loader(name, self)
+        return None
+
+    def create_module(self, spec):
+        return importlib.import_module("sim" + spec.name[len("dgraph_sim"):])
+
+    def exec_module(self, module):
+        pass
+
+sys.meta_path.insert(0, _SimAlias())
+"""
+"""Run first in a checkout (cwd and PYTHONPATH): ``dgraph_sim`` imports that checkout's ``sim/`` folder."""
+DRIVER = CHECKOUT_IMPORTS + r"""
 import json, sys, tempfile, time
 import dgraph as dg
+import dgraph_sim
 ticks, warmup = int(sys.argv[1]), int(sys.argv[2])
 
 def profiled(graph, ticks):  # the timed ticks (bench/profile_shares.py counts the samples inside it)
@@ -54,7 +76,8 @@ with tempfile.TemporaryDirectory() as tmp:
     graph.close()  # flushes the recording: part of what a run costs
     wall = loop + time.perf_counter() - start
 result = json.dumps({"real_time_factor": ticks * graph.dt / wall, "loop_us": wall / ticks * 1e6, "ticks": ticks,
-                     "profiled_s": loop, "fallen": bool(graph["device"].fallen.value), "dgraph": dg.__file__})
+                     "profiled_s": loop, "fallen": bool(graph["device"].fallen.value), "dgraph": dg.__file__,
+                     "dgraph_sim": dgraph_sim.__file__})
 if len(sys.argv) > 3:  # a file for the result (under py-spy)
     with open(sys.argv[3], "w") as f:
         f.write(result)
@@ -107,8 +130,9 @@ def run_demo(tree: Path, ticks: int, warmup: int) -> dict[str, object]:
     if out.returncode != 0:
         raise RuntimeError(f"demo run in {tree} failed (exit {out.returncode}):\n{out.stderr[-3000:]}")
     result = json.loads(out.stdout.strip().splitlines()[-1])
-    if not Path(result["dgraph"]).resolve().is_relative_to(tree.resolve()):
-        raise RuntimeError(f"the run in {tree} imported dgraph from {result['dgraph']}")
+    for package in ("dgraph", "dgraph_sim"):
+        if not Path(result[package]).resolve().is_relative_to(tree.resolve()):
+            raise RuntimeError(f"the run in {tree} imported {package} from {result[package]}")
     return result
 
 

@@ -258,7 +258,7 @@ def robot_spec(source: str, dt: float = 0.001, collisions: str = "all",
     ``mjcf``: the path of an MJCF file describing the same robot for MuJoCo (:func:`mjcf_spec`);
     the source then gives only the Pinocchio model and the :class:`RobotInfo` (its URDF is not
     read by MuJoCo, so its meshes need not be found)."""
-    from dgraph.entities.robot.loading import check_source, is_urdf_path, load_model, load_robot
+    from dgraph.entities.robot.loading import check_source, describe_robot, is_urdf_path, load_model
 
     if mjcf is not None:
         if collisions != "all":
@@ -272,7 +272,7 @@ def robot_spec(source: str, dt: float = 0.001, collisions: str = "all",
                 path = os.path.realpath(source)
                 model, name, q0 = load_model(path), os.path.splitext(os.path.basename(path))[0], None
             else:
-                robot = load_robot(source)
+                robot = describe_robot(source)
                 model, name, q0 = robot.model, source, np.asarray(robot.q0, dtype=float)
             info = RobotInfo(name, model, "", floating_base=_has_free_flyer(model), q0=_default_q0(model, name, q0))
         return mjcf_spec(mjcf, info, dt)
@@ -283,7 +283,7 @@ def robot_spec(source: str, dt: float = 0.001, collisions: str = "all",
         path = os.path.realpath(source)
         return urdf_spec(path, load_model(path), os.path.splitext(os.path.basename(path))[0], dt, collisions,
                          package_dirs)
-    robot = load_robot(source)
+    robot = describe_robot(source)
     return urdf_spec(os.path.realpath(robot.urdf), robot.model, source, dt, collisions, package_dirs,
                      np.asarray(robot.q0, dtype=float))
 
