@@ -664,7 +664,7 @@ def graph_summary(graph: dg.Graph, folder: Path) -> dict:
     from dgraph.files import to_plain
 
     def value(entity, key, v):
-        if type(entity)._param_decls[key].kind == "path":
+        if type(entity)._param_decls[key].kind == "path" and v is not None:
             return os.path.relpath(v, folder)
         return sorted(v) if (entity.type_name, key) == ("Recorder", "signals") else to_plain(v, key)
 
