@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -67,6 +68,12 @@ class Recorder(dg.Entity):
                            doc="ticks buffered before a Rerun send (default: 1000 to a file, 200 to a viewer)")
     layout = dg.Param("default", kind="object",
                       doc=f"Rerun blueprint: {' or '.join(LAYOUTS)}, or a list of panels {{title, signals}}")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, signals: Sequence[str], rerun: Literal["off", "save", "spawn", "serve"] | None = None,
+            rrd_path: str | None = None, npz_path: str | None = None, decimation: int = 1,
+            flush_every: int | None = None, layout: Any = "default",
+        ) -> None: ...
 
     def configure(self) -> None:
         """Check the parameters."""

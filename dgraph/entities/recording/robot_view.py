@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -110,6 +110,12 @@ class RobotView(dg.Entity):
     rrd_path = dg.Param(None, kind="str", doc=".rrd file for rerun=save (default out/<graph name>.rrd)")
     flush_every = dg.Param(None, kind="int", minimum=1,
                            doc="ticks buffered before a Rerun send (default: 1000 to a file, 200 to a viewer)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: str = "talos", decimation: int = 20, path: str = "world/robot",
+            floor: bool = True, rerun: Literal["off", "save", "spawn", "serve"] | None = None,
+            rrd_path: str | None = None, flush_every: int | None = None,
+        ) -> None: ...
 
     q = dg.Input(shape=("nq",), doc="configuration (Pinocchio convention)")
 
