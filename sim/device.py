@@ -28,10 +28,13 @@ from __future__ import annotations
 import copy
 import math
 import os
+from collections.abc import Sequence
 from fractions import Fraction
+from typing import TYPE_CHECKING, Literal
 
 import mujoco
 import numpy as np
+from numpy.typing import ArrayLike
 
 import dgraph as dg
 from dgraph.entities.robot.loading import check_source
@@ -165,6 +168,18 @@ class MujocoDevice(dg.Device):
     video_camera = dg.Param("robot", kind="str", choices=("robot", "track", "front"),
                             doc="video camera: framing the whole robot (following it past a dead zone), "
                             "side view tracking its CoM, or fixed in front of the origin")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, model: str = "talos", package_dirs: Sequence[str] = (), mjcf: str | None = None,
+            mjcf_tolerance: float = 0.01, scene: Literal["flat", "block", "stairs", "slope", "push"] = "flat",
+            collisions: Literal["feet", "all"] = "all", control_mode: Literal["torque", "position"] = "torque",
+            kp: ArrayLike | None = None, kd: ArrayLike | None = None, q0: ArrayLike | None = None,
+            v0: ArrayLike | None = None, dt: float | None = None, wrench_bodies: Sequence[str] = (),
+            remove_bodies: Sequence[str] = (), remove_times: ArrayLike = (), fall_height: float | None = None,
+            viewer: bool = False, viewer_fps: float = 30.0, stop_on_fall: bool = False, video_path: str | None = None,
+            video_fps: float = 25.0, video_start: float = 0.0, video_size: Sequence[int] = (320, 240),
+            video_camera: Literal["robot", "track", "front"] = "robot",
+        ) -> None: ...
 
     control = dg.Input(shape=_na, doc="joint torques (torque mode) or position targets (position mode)")
     # declared per instance (their zero default is sized by the robot): in position mode only,
