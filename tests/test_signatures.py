@@ -18,10 +18,6 @@ from dgraph import signatures
 
 ROOT = Path(__file__).resolve().parents[1]
 
-PENDING = {"dgraph_sim.device.MujocoDevice"}
-"""Entities whose files were being changed by others when the blocks were written: run
-``python -m dgraph.signatures`` once they are done, and empty this set."""
-
 
 def test_every_entity_class_declares_its_constructor_for_type_checkers():
     """Each registered entity carries the __init__ its parameters make (``python -m dgraph.signatures``
@@ -29,8 +25,7 @@ def test_every_entity_class_declares_its_constructor_for_type_checkers():
     classes = signatures.builtin_classes()
     assert dg.registry.plugin_errors() == {}  # a family that does not load is not checked
     stale = set(signatures.stale(classes))
-    assert stale - PENDING == set(), "run: python -m dgraph.signatures"
-    assert PENDING <= stale, f"written now, remove from PENDING: {sorted(PENDING - stale)}"
+    assert stale == set(), "run: python -m dgraph.signatures"
 
 
 def test_the_block_is_written_after_the_parameters_and_rewritten_when_they_change(tmp_path, monkeypatch):
@@ -91,7 +86,7 @@ FAMILIES = {
     "tasks": ("from dgraph.entities.tasks import Task", 'Task("e")'),
     "contacts": ("from dgraph.entities.contacts import Contact6d", 'Contact6d("e", frame="sole")'),
     "solvers": ("from dgraph.entities.solvers import InverseDynamicsSolver", 'InverseDynamicsSolver("e", tasks=["t"])'),
-    "mujoco device": ("from dgraph_sim.device import MujocoDevice", 'MujocoDevice("e", robot="talos")'),
+    "mujoco device": ("from dgraph_sim.device import MujocoDevice", 'MujocoDevice("e", model="talos")'),
 }
 
 
@@ -152,9 +147,7 @@ UNEXPECTED = {"mypy": 'error: Unexpected keyword argument "sise" for "{}"  [call
               "pyright": 'error: No parameter named "sise"'}
 
 
-@pytest.mark.parametrize("family", [
-    pytest.param(f, marks=pytest.mark.xfail(strict=True, reason="left out: see PENDING")) if f == "mujoco device"
-    else f for f in FAMILIES])
+@pytest.mark.parametrize("family", list(FAMILIES))
 def test_a_static_checker_sees_the_parameters_of_an_entity(checker_report, family):
     """Right keywords type-check, a misspelt one is an unexpected keyword argument, and the
     revealed constructor lists the parameters with their types and defaults."""
