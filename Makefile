@@ -43,4 +43,4 @@ bench: $(STAMP)
 	$(BIN)/python bench/energy_tank.py --plots docs
 
 clean:
-	rm -rf $(VENV) .venv-bench .venv-tsid out .pytest_cache .hypothesis
+	rm -rf $(VENV) .venv-bench .venv-tsid .venv-lower out .pytest_cache .hypothesis
