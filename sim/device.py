@@ -41,7 +41,7 @@ from dgraph.entities.robot.loading import check_source
 from dgraph_sim.camera import RobotCamera
 from dgraph_sim.disturbances import Removals
 from dgraph_sim.model import SimModel, load
-from dgraph_sim.robots import MJCF_TOLERANCE, MjcfError
+from dgraph_sim.robots import MJCF_TOLERANCE, MjcfError, RobotInfo
 from dgraph_sim.scenes import SCENES
 from dgraph_sim.video import VideoError, VideoWriter, check_video, log_video
 from dgraph_sim.viewer import PassiveViewer, ViewerError
@@ -255,7 +255,7 @@ class MujocoDevice(dg.Device):
                                         doc=f"world-frame [force, torque] applied at the CoM of {body}"))
             self._wrenches.append((body_id, port))
 
-    def _declare_sensors(self, robot: object) -> None:
+    def _declare_sensors(self, robot: RobotInfo) -> None:
         """The states of the robot's sensors (IMU, force/torque) and of its fall detection, if it has them."""
         if robot.imu is not None:
             self.declare("imu_orientation", dg.State(finite=None, shape=(4,),
@@ -321,12 +321,6 @@ class MujocoDevice(dg.Device):
         self._fallen_staged = self._fault_staged = False
         self._held = self._held_next = None
         self._viewer: PassiveViewer | None = None
-        if self.viewer:
-            try:
-                self._viewer = PassiveViewer(m, d, self.dt, self.viewer_fps)
-            except ViewerError as exc:
-                raise dg.ParamError(f"{self.name}: parameter 'viewer': {exc}", entity=self.name) from None
-            self.after.add(self._viewer.sync)
         self._renderers: dict[tuple[int, int], mujoco.Renderer] = {}
         self._camera = RobotCamera(m, self.sim.robot_bodies, jm.base_body)
         self._video: VideoWriter | None = None
@@ -339,6 +333,12 @@ class MujocoDevice(dg.Device):
                 raise dg.ParamError(f"{self.name}: video_path: {exc}", entity=self.name) from None
             self._renderer(*self.video_size, purpose="video_path")  # no OpenGL: refused now, not at the first frame
             self.after.add(self._record_frame)
+        if self.viewer:  # last: a window is opened only once every other check has passed
+            try:
+                self._viewer = PassiveViewer(m, d, self.dt, self.viewer_fps)
+            except ViewerError as exc:
+                raise dg.ParamError(f"{self.name}: parameter 'viewer': {exc}", entity=self.name) from None
+            self.after.add(self._viewer.sync)
 
     def _setup_sensors(self) -> None:
         """One gather of ``sensordata`` per tick for the robot's sensors, and the states that are its parts.
