@@ -14,7 +14,7 @@ from dgraph.entities.devices import KinematicDevice
 from dgraph.entities.operators import Constant
 from dgraph.entities.recording import Recorder, RobotView, open_stream, read_series
 from dgraph.entities.recording.robot_view import quaternions_xyzw
-from dgraph.entities.robot.robot_state import load_robot
+from dgraph.entities.robot.loading import load_robot
 from tests.conftest import Scale, Ticker
 
 pin = pytest.importorskip("pinocchio")
@@ -203,7 +203,7 @@ def test_streams_are_shared_per_file_and_graph_and_closed_by_the_last_user(tmp_p
 def test_parameters_are_checked():
     with pytest.raises(dg.ParamError, match="path must be an entity path"):
         RobotView("v", path="world//robot")
-    with pytest.raises(dg.ParamError, match="cannot load the robot 'no_such_robot'"):
+    with pytest.raises(dg.ParamError, match="cannot load robot model 'no_such_robot'"):
         RobotView("v", model="no_such_robot")
     with pytest.raises(dg.ParamError, match="decimation"):
         RobotView("v", decimation=0)
@@ -217,3 +217,14 @@ def test_the_kinematics_and_the_3d_view_share_one_load_of_the_robot():
     from dgraph.entities.robot import load_model
 
     assert load_model("talos") is load_robot("talos").model
+
+
+def test_a_view_that_records_nothing_reads_no_mesh():
+    """With Rerun off (the library's default) the view loads the kinematics only; its meshes are
+    read when it first draws (here: asked for its links)."""
+    from dgraph.entities.robot.loading import load_robot
+
+    load_robot.cache_clear()
+    view = RobotView("view", model="ur5", rerun="off")
+    assert view.nq == 6 and load_robot.cache_info().currsize == 0
+    assert len(view.links) > 0 and load_robot.cache_info().currsize == 1

@@ -17,7 +17,7 @@ from dgraph.entities.recording.rerun_stream import (
     open_stream_for,
     sink_mode,
 )
-from dgraph.entities.robot.robot_state import load_robot
+from dgraph.entities.robot.loading import load_model, load_robot
 
 FLOOR_HALF_SIZE = 2.0
 """Half side of the floor square, in metres."""
@@ -120,7 +120,8 @@ class RobotView(dg.Entity):
     q = dg.Input(shape=("nq",), doc="configuration (Pinocchio convention)")
 
     def configure(self) -> None:
-        """Load the model; list the links that carry visual geometries."""
+        """Load the kinematics (the meshes are read when the view first draws: one that records
+        nothing reads none)."""
         self.rerun = sink_mode(self.rerun, self.rrd_path)
         if self.flush_every is None:
             self.flush_every = default_flush_every(self.rerun)
@@ -128,18 +129,9 @@ class RobotView(dg.Entity):
         if not self.path or any(not part for part in self.path.split("/")):
             raise dg.ParamError(f"{self.name}: path must be an entity path such as 'world/robot', got "
                                 f"{self.params['path']!r}", entity=self.name)
-        try:
-            robot = load_robot(self.model)
-        except Exception as exc:  # example-robot-data raises plain exceptions for unknown names
-            raise dg.ParamError(f"{self.name}: cannot load the robot {self.model!r}: {exc}",
-                                entity=self.name) from None
-        self.pin_model = robot.model
-        self.visual_model = robot.visual_model
+        self.pin_model = load_model(self.model, self.name)
         self.nq = self.pin_model.nq
-        self.links = self._links()
-        self._joints = np.array([link.joint for link in self.links])
-        self._jMf = np.array([link.placement.homogeneous for link in self.links])
-        self._link_paths = [f"/{self.path}/{link.name}" for link in self.links]
+        self._links: list[_Link] | None = None
         self._fields: list[Any] | None = None
         self._data: Any = None
         self._stream: RerunStream | None = None
@@ -151,10 +143,33 @@ class RobotView(dg.Entity):
         self.skipped: list[str] = []  # geometries that could not be drawn
         self.closed = False
 
-    def _links(self) -> list[_Link]:
+    @property
+    def links(self) -> list[_Link]:
+        """The links that carry visual geometries (their meshes read at the first use)."""
+        return self._load_links()
+
+    def _link_frames(self) -> tuple[np.ndarray, np.ndarray]:
+        """The joint each link moves with, and the link's placement in that joint's frame."""
+        self._load_links()
+        return self._joints, self._jMf
+
+    def _load_links(self) -> list[_Link]:
+        """Read the robot's meshes (once per process: :func:`load_robot`) and list its links."""
+        if self._links is None:
+            try:
+                visual_model = load_robot(self.model).visual_model
+            except Exception as exc:  # Pinocchio raises plain exceptions for a mesh it cannot read
+                raise dg.ParamError(f"{self.name}: cannot load the meshes of the robot {self.model!r}: {exc}",
+                                    entity=self.name) from None
+            self._links = self._collect_links(visual_model)
+            self._joints = np.array([link.joint for link in self._links])
+            self._jMf = np.array([link.placement.homogeneous for link in self._links])
+        return self._links
+
+    def _collect_links(self, visual_model: Any) -> list[_Link]:
         model = self.pin_model
         links: dict[int, _Link] = {}
-        for geom in self.visual_model.geometryObjects:
+        for geom in visual_model.geometryObjects:
             frame = geom.parentFrame
             if frame >= model.nframes or model.frames[frame].parentJoint != geom.parentJoint:
                 frame = -1 - geom.parentJoint  # no usable frame: the joint itself
@@ -184,11 +199,12 @@ class RobotView(dg.Entity):
         if self._data is None:
             self._data = self.pin_model.createData()
         model, data = self.pin_model, self._data
+        link_joints, jMf = self._link_frames()
         joints = []
         for q in qs:
             pin.forwardKinematics(model, data, q)
             joints += [oMi.homogeneous for oMi in data.oMi.tolist()]  # tolist: one binding call
-        return np.array(joints).reshape(len(qs), model.njoints, 4, 4)[:, self._joints] @ self._jMf
+        return np.array(joints).reshape(len(qs), model.njoints, 4, 4)[:, link_joints] @ jMf
 
     # -- tick -----------------------------------------------------------------------------
     def _open(self) -> RerunStream:
@@ -234,7 +250,7 @@ class RobotView(dg.Entity):
         import pyarrow as pa
 
         fields = []
-        for path in self._link_paths:
+        for path in (f"/{self.path}/{link.name}" for link in self.links):
             for descriptor, size in ((rr.Transform3D.descriptor_translation(), 3),
                                      (rr.Transform3D.descriptor_quaternion(), 4)):
                 item = pa.list_(pa.field("item", pa.float32(), nullable=False), size)
