@@ -28,6 +28,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from dgraph.entities.robot.loading import has_free_flyer
+
 _FREE_QPOS_OF_Q = np.array([0, 1, 2, 4, 5, 6, 3])
 """Offsets in the free joint's ``qpos`` of ``q[0:7]``: ``q[3:6]`` (x, y, z) sit at 4..6, ``q[6]`` (w) at 3."""
 
@@ -62,7 +64,7 @@ class JointMap:
 
     def __init__(self, pin_model: Any, mj_model: mujoco.MjModel):
         self.nq, self.nv = int(pin_model.nq), int(pin_model.nv)
-        self.floating_base = pin_model.njoints > 1 and pin_model.joints[1].shortname() == "JointModelFreeFlyer"
+        self.floating_base = has_free_flyer(pin_model)
         n_base = 6 if self.floating_base else 0
         self.na = self.nv - n_base
         if self.floating_base:

@@ -70,6 +70,8 @@ import mujoco
 import numpy as np
 import pinocchio
 
+from dgraph.entities.robot.loading import has_free_flyer
+
 TALOS_URDF = "talos_data/robots/talos_reduced.urdf"
 SOLE_HALF_SIZE = (0.105, 0.069, 0.005)
 """Half sizes of the sole collision box (x, y, z)."""
@@ -187,7 +189,7 @@ def _add_motors(spec: mujoco.MjSpec, pin_model: Any) -> None:
     gear 1, the URDF effort limit as ``ctrlrange`` and ``actfrcrange``, the armature of the
     Pinocchio model, no damping nor friction loss (see the module docstring)."""
     by_name = {j.name: j for j in spec.joints}
-    first = 2 if _has_free_flyer(pin_model) else 1
+    first = 2 if has_free_flyer(pin_model) else 1
     for jid in range(first, pin_model.njoints):
         name = pin_model.names[jid]
         joint = by_name.get(name)
@@ -206,10 +208,6 @@ def _add_motors(spec: mujoco.MjSpec, pin_model: Any) -> None:
         motor.set_to_motor()
         motor.ctrlrange = [-effort, effort]
         motor.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
-
-
-def _has_free_flyer(pin_model: Any) -> bool:
-    return pin_model.njoints > 1 and pin_model.joints[1].shortname() == "JointModelFreeFlyer"
 
 
 def _add_sensor_sites(spec: mujoco.MjSpec, imu: SensorSite, force_torque: dict[str, SensorSite]) -> None:
@@ -274,7 +272,7 @@ def robot_spec(source: str, dt: float = 0.001, collisions: str = "all",
             else:
                 robot = describe_robot(source)
                 model, name, q0 = robot.model, source, np.asarray(robot.q0, dtype=float)
-            info = RobotInfo(name, model, "", floating_base=_has_free_flyer(model), q0=_default_q0(model, name, q0))
+            info = RobotInfo(name, model, "", floating_base=has_free_flyer(model), q0=_default_q0(model, name, q0))
         return mjcf_spec(mjcf, info, dt)
     if source in ROBOTS:
         return ROBOTS[source](dt, collisions)
@@ -304,7 +302,7 @@ def urdf_spec(urdf: str, pin_model: Any, name: str, dt: float = 0.001, collision
     spec.modelname = name
     spec.option.timestep = dt
     root = spec.worldbody.first_body()
-    floating = _has_free_flyer(pin_model)
+    floating = has_free_flyer(pin_model)
     if floating:
         root.add_freejoint(name=pin_model.names[1])
     for equality in list(spec.equalities):  # URDF <mimic>: Pinocchio's model has independent joints
@@ -325,7 +323,7 @@ def _default_q0(pin_model: Any, name: str, q0: np.ndarray | None) -> np.ndarray:
     q = np.asarray(pinocchio.neutral(pin_model) if q0 is None else q0, dtype=float).copy()
     if q.shape != (pin_model.nq,):
         raise ValueError(f"{name}: q0 needs {pin_model.nq} values, got {q.shape}")
-    joints = slice(7 if _has_free_flyer(pin_model) else 0, None)
+    joints = slice(7 if has_free_flyer(pin_model) else 0, None)
     q[joints] = np.clip(q[joints], pin_model.lowerPositionLimit[joints], pin_model.upperPositionLimit[joints])
     return q
 
@@ -455,7 +453,7 @@ def mjcf_spec(path: str, info: RobotInfo, dt: float = 0.001) -> tuple[mujoco.MjS
         raise MjcfError(f"{path}: the worldbody holds geoms {[g.name for g in spec.worldbody.geoms]}: the MJCF "
                         "describes the robot only (the floor and the rest come from the device's scene)")
     root = roots[0]
-    floating = _has_free_flyer(pin_model)
+    floating = has_free_flyer(pin_model)
     first = 2 if floating else 1
     pin_joints = {pin_model.names[j]: pin_model.joints[j] for j in range(first, pin_model.njoints)}
     free = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_FREE]
@@ -509,7 +507,7 @@ def mjcf_spec(path: str, info: RobotInfo, dt: float = 0.001) -> tuple[mujoco.MjS
 def _check_actuators(spec: mujoco.MjSpec, pin_model: Any, path: str) -> None:
     """The MJCF's actuators are one gear-1 motor per actuated joint (a missing ``ctrlrange`` set to
     the URDF effort limit), or there are none and motors are added (see :func:`mjcf_spec`)."""
-    first = 2 if _has_free_flyer(pin_model) else 1
+    first = 2 if has_free_flyer(pin_model) else 1
     effort = {pin_model.names[j]: float(pin_model.effortLimit[pin_model.joints[j].idx_v])
               for j in range(first, pin_model.njoints)}
     actuators = list(spec.actuators)
@@ -576,7 +574,7 @@ def _check_configurations(pin_model: Any, q0: np.ndarray, count: int = 3) -> lis
     """``q0`` and ``count`` configurations with the joints drawn (seeded) within their limits
     (where a limit is infinite, within ±1 of ``q0``), the base of ``q0``."""
     rng = np.random.default_rng(0)
-    n_base = 7 if _has_free_flyer(pin_model) else 0
+    n_base = 7 if has_free_flyer(pin_model) else 0
     low = np.asarray(pin_model.lowerPositionLimit[n_base:], dtype=float)
     high = np.asarray(pin_model.upperPositionLimit[n_base:], dtype=float)
     low = np.where(np.isfinite(low), low, q0[n_base:] - 1.0)

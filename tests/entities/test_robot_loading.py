@@ -39,3 +39,26 @@ def test_the_kinematics_read_no_mesh_and_the_3d_view_adds_them_to_the_same_model
 def test_a_loader_that_builds_its_own_model_is_run_as_it_is():
     legs = describe_robot("talos_legs")  # a model reduced by its loader: meshes included
     assert legs.visual_model is not None and load_robot("talos_legs") is legs
+
+
+@pytest.mark.parametrize(("name", "floating"), [("talos", True), ("panda", False), ("ur5", False)])
+def test_has_free_flyer_tells_a_floating_base(name, floating):
+    from dgraph.entities.robot.loading import has_free_flyer
+
+    assert has_free_flyer(load_model(name)) is floating
+    assert not has_free_flyer(pin.Model())  # the universe joint only
+
+
+def test_the_free_flyer_test_and_the_loaders_live_in_loading_only():
+    """One ``has_free_flyer``; ``load_model`` imported from ``loading``, not from ``robot_state``."""
+    import pathlib
+
+    import dgraph
+    import dgraph_sim
+    from dgraph.entities.robot import robot_state
+
+    assert not hasattr(robot_state, "load_model")
+    roots = [pathlib.Path(dgraph.__file__).parent, pathlib.Path(dgraph_sim.__file__).parent]
+    twins = [str(path) for root in roots for path in root.rglob("*.py")
+             if path.name != "loading.py" and '"JointModelFreeFlyer"' in path.read_text()]
+    assert twins == []

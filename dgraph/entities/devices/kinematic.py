@@ -48,7 +48,7 @@ class KinematicDevice(dg.Device):
     def configure(self) -> None:
         """Size the state from the model or from ``size``."""
         if self.model is not None:
-            from dgraph.entities.robot.robot_state import load_model  # Pinocchio only when given a model
+            from dgraph.entities.robot.loading import load_model  # Pinocchio only when given a model
 
             self.pin_model = load_model(self.model, self.name)
             self.nq, self.nv = self.pin_model.nq, self.pin_model.nv

@@ -80,13 +80,11 @@ class ConfigurationIntegrator(dg.Entity):
         """Load the model (Pinocchio only here: the discrete family imports the core only)."""
         import pinocchio as pin
 
-        from dgraph.entities.robot.robot_state import load_model
+        from dgraph.entities.robot.loading import has_free_flyer, load_model
 
         self.pin_model = load_model(self.model, self.name)
         self.nq, self.nv = self.pin_model.nq, self.pin_model.nv
-        model = self.pin_model
-        floating = model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer"
-        self._base_q, self._base_v = (7, 6) if floating else (0, 0)
+        self._base_q, self._base_v = (7, 6) if has_free_flyer(self.pin_model) else (0, 0)
         self.nqa, self.na = self.nq - self._base_q, self.nv - self._base_v
         self._neutral = pin.neutral(self.pin_model)
         self._integrate = lambda q, dq: pin.integrate(self.pin_model, q, dq)

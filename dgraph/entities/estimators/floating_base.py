@@ -17,7 +17,7 @@ from dgraph.entities.estimators.leg_odometry import (
     standing_configuration,
 )
 from dgraph.entities.estimators.sensor_guard import Channel, SensorGuard
-from dgraph.entities.robot.robot_state import load_model
+from dgraph.entities.robot.loading import has_free_flyer, load_model
 from dgraph.entities.robot.rotations import matrix_to_quat, quat_to_rows
 from dgraph.signals.spec import non_finite
 from dgraph.signals.value_types import value_type
@@ -204,7 +204,7 @@ class FloatingBaseEstimator(dg.Entity):
         """Load the model, resolve the frames, size the encoder inputs."""
         entity = f"{self.name} ({self.type_name})"
         self.pin_model = model = load_model(self.model, self.name)
-        if model.njoints < 2 or model.joints[1].shortname() != "JointModelFreeFlyer":
+        if not has_free_flyer(model):
             raise dg.ParamError(f"{entity}: the model's first joint must be a free flyer", entity=self.name)
         self.nq, self.nv = model.nq, model.nv
         self.nj, self.nj_v = model.nq - 7, model.nv - 6

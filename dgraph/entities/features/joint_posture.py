@@ -10,7 +10,8 @@ import numpy as np
 import dgraph as dg
 from dgraph.control.feature import FeatureValue
 from dgraph.entities.features.feature import Feature
-from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
+from dgraph.entities.robot.loading import load_model
+from dgraph.entities.robot.robot_state import RobotState, plugged_model
 from dgraph.entities.selection import contiguous
 
 

@@ -13,7 +13,7 @@ from dgraph.control.rows import RowBlock, stacked
 from dgraph.control.solutions import CascadeSolution
 from dgraph.entities.hierarchy.stack import StackCommands
 from dgraph.entities.named_inputs import declare_named_inputs
-from dgraph.entities.robot.robot_state import load_model
+from dgraph.entities.robot.loading import load_model
 from dgraph.entities.solver_report import SolverReport
 
 

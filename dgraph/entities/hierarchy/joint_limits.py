@@ -9,7 +9,8 @@ import numpy as np
 import dgraph as dg
 from dgraph.control.rows import RowBlock, selection
 from dgraph.entities.activation import Activatable
-from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model
+from dgraph.entities.robot.loading import load_model
+from dgraph.entities.robot.robot_state import RobotState, plugged_model
 
 
 @dg.register

@@ -84,6 +84,12 @@ def _urdf_model(path: str) -> pin.Model:
     return pin.buildModelFromUrdf(path)
 
 
+def has_free_flyer(model: pin.Model) -> bool:
+    """True if ``model``'s first joint is a free flyer: a floating base (7 coordinates, 6
+    velocities), as example-robot-data builds humanoids and quadrupeds."""
+    return model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer"
+
+
 def package_dirs_of(urdf: str, extra: tuple[str, ...] = ()) -> list[str]:
     """Where the ``package://`` meshes of ``urdf`` are looked for: ``extra``, then the file's
     folder and each of its ancestors (example-robot-data's ``package://example-robot-data/robots/``

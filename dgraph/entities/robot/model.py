@@ -9,7 +9,8 @@ import numpy as np
 import pinocchio as pin
 
 import dgraph as dg
-from dgraph.entities.robot.robot_state import DataFields, RobotState, load_model
+from dgraph.entities.robot.loading import load_model
+from dgraph.entities.robot.robot_state import DataFields, RobotState
 
 
 def _frame_outputs(frame: str, frame_id: int) -> dict[str, dg.Output]:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from dgraph.entities.robot.loading import load_model, load_robot  # noqa: F401  (re-exported: older imports)
+from dgraph.entities.robot.loading import has_free_flyer, load_robot  # noqa: F401  (load_robot: robot_view.py's import)
 from dgraph.errors import DGraphError, ParamError
 from dgraph.signals.value_types import value_type
 
@@ -259,7 +259,7 @@ def _read_only(array: np.ndarray) -> np.ndarray:
 
 def unactuated_dofs(model: pin.Model) -> int:
     """Velocities of the unactuated base: 6 for a free flyer as first joint, else 0."""
-    return 6 if model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer" else 0
+    return 6 if has_free_flyer(model) else 0
 
 
 def plugged_model(robot_input: Any) -> pin.Model | None:

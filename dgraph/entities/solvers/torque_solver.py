@@ -13,7 +13,8 @@ from dgraph.control.equation import TaskEquation
 from dgraph.control.solutions import QPSolution
 from dgraph.control.status import Status
 from dgraph.entities.named_inputs import declare_named_inputs
-from dgraph.entities.robot.robot_state import RobotState, load_model, plugged_model, unactuated_dofs
+from dgraph.entities.robot.loading import load_model
+from dgraph.entities.robot.robot_state import RobotState, plugged_model, unactuated_dofs
 from dgraph.entities.solver_report import SolverReport
 
 
