@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import socket
 
 import numpy as np
 import pytest
@@ -110,3 +111,15 @@ def graph():
 @pytest.fixture
 def rng():
     return np.random.default_rng(0)
+
+
+@pytest.fixture
+def ports() -> tuple[int, int]:
+    """Two TCP ports free on loopback just now (a Rerun server's gRPC and web viewer ports)."""
+    probes = [socket.socket() for _ in range(2)]
+    for probe in probes:
+        probe.bind(("127.0.0.1", 0))
+    free = (probes[0].getsockname()[1], probes[1].getsockname()[1])
+    for probe in probes:
+        probe.close()
+    return free

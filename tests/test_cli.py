@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -188,13 +187,13 @@ def test_two_recorders_get_a_file_each_from_one_save_option(tmp_path):
                                                     "r_recorder.npz", "r_second.npz"}
 
 
-def test_bind_and_ports_choose_where_serve_listens(monkeypatch, capsys):
+def test_bind_and_ports_choose_where_serve_listens(ports, monkeypatch, capsys):
     from dgraph.entities.recording import rerun_stream
     from tests.entities.test_rerun_stream import listening
 
     assert rerun_stream.SERVE.bind == "127.0.0.1"  # without the option: this machine only
     default = rerun_stream.SERVE
-    grpc, web = free_ports()
+    grpc, web = ports
     assert main(["run", PD, "--ticks", "5", "--serve", "--bind", "127.0.0.2", "--port", str(grpc),
                  "--web-viewer-port", str(web), "-q"]) == 0
     assert rerun_stream.SERVE == default  # for this run only
@@ -208,17 +207,6 @@ def test_bind_and_ports_choose_where_serve_listens(monkeypatch, capsys):
 def test_keep_serving_without_a_server_says_so_and_ends(tmp_path, capsys):
     assert main(["run", PD, "--ticks", "5", "-q", "--no-rerun", "--keep-serving"]) == 0
     assert "--keep-serving: nothing is served" in capsys.readouterr().err
-
-
-def free_ports(n: int = 2) -> list[int]:
-    """``n`` TCP ports free on loopback just now."""
-    probes = [socket.socket() for _ in range(n)]
-    for probe in probes:
-        probe.bind(("127.0.0.1", 0))
-    ports = [probe.getsockname()[1] for probe in probes]
-    for probe in probes:
-        probe.close()
-    return ports
 
 
 def test_run_a_10000_deep_chain(tmp_path):
@@ -389,7 +377,7 @@ def test_video_films_every_mujoco_device_of_the_file(tmp_path):
     assert not (tmp_path / "pd.gif").exists() and not (tmp_path / "out").exists()
 
 
-def test_serve_keeps_serving_a_web_viewer_that_draws_the_recording_until_ctrl_c(tmp_path):
+def test_serve_keeps_serving_a_web_viewer_that_draws_the_recording_until_ctrl_c(tmp_path, ports):
     """The served web viewer, loaded by headless Chromium after the run, draws the recording (WebGL
     through SwiftShader): its screenshot is far from uniform. Skipped only outside CI without Chromium."""
     import os
@@ -403,7 +391,7 @@ def test_serve_keeps_serving_a_web_viewer_that_draws_the_recording_until_ctrl_c(
         if os.environ.get("CI"):
             pytest.fail("CI is set and Chromium is missing: .ci/run installs it (apt-get install chromium)")
         pytest.skip("Chromium is not installed (apt-get install chromium)")
-    grpc, web = free_ports()
+    grpc, web = ports
     exe = Path(sys.executable).with_name("dgraph")
     run = subprocess.Popen([str(exe), "run", PD, "--ticks", "500", "-q", "--serve", "--port", str(grpc),
                             "--web-viewer-port", str(web), "--keep-serving"],

@@ -29,18 +29,6 @@ def listening(port: int) -> set[str]:
     return found
 
 
-@pytest.fixture
-def ports() -> tuple[int, int]:
-    """Two TCP ports free on loopback just now (gRPC, web viewer)."""
-    probes = [socket.socket() for _ in range(2)]
-    for probe in probes:
-        probe.bind(("127.0.0.1", 0))
-    free = tuple(probe.getsockname()[1] for probe in probes)
-    for probe in probes:
-        probe.close()
-    return free
-
-
 def test_the_listing_reads_a_socket_back():
     with socket.socket() as server:
         server.bind(("127.0.0.1", 0))
