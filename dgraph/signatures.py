@@ -153,6 +153,15 @@ def _classes_of(module: str) -> list[type[Entity]]:
             if isinstance(c, type) and issubclass(c, Entity) and c is not Entity and c.__module__ == module]
 
 
+def _needs_block(cls: type[Entity]) -> bool:
+    """Whether ``cls`` needs a block of its own: its constructor is the generic one and its
+    parameters are not exactly those of the entity class it derives from (whose block it inherits)."""
+    if not _generic_init(cls):
+        return False
+    parent = next((b for b in cls.__mro__[1:] if issubclass(b, Entity) and b._param_decls), None)
+    return parent is None or not _generic_init(parent) or init_lines(parent) != init_lines(cls)
+
+
 def builtin_classes() -> list[type[Entity]]:
     """The registered entity types of dgraph and dgraph_sim."""
     return [c for c in entity_types().values() if c.__module__.split(".")[0] in ("dgraph", "dgraph_sim")]
@@ -162,7 +171,7 @@ def stale(classes: list[type[Entity]]) -> list[str]:
     """``module.Class`` of each class whose block is missing or differs from what its parameters make."""
     out = []
     for cls in classes:
-        if not _generic_init(cls):
+        if not _needs_block(cls):
             continue
         source = Path(inspect.getfile(cls)).read_text().splitlines()
         node = next(n for n in ast.parse("\n".join(source)).body
@@ -175,11 +184,12 @@ def stale(classes: list[type[Entity]]) -> list[str]:
 
 
 def write(classes: list[type[Entity]]) -> list[Path]:
-    """Write the block of each class (a class with a constructor of its own is left alone);
+    """Write the block of each class (a class with a constructor of its own, or the parameters of
+    its parent entity class, is left alone);
     returns the files changed. Names the blocks use are imported if the module lacks them."""
     by_file: dict[Path, list[type[Entity]]] = {}
     for cls in classes:
-        if _generic_init(cls):
+        if _needs_block(cls):
             by_file.setdefault(Path(inspect.getfile(cls)), []).append(cls)
     changed = []
     for path, file_classes in by_file.items():

@@ -64,6 +64,38 @@ def test_the_block_is_written_after_the_parameters_and_rewritten_when_they_chang
     assert "size: int = 3) -> None: ...\n" in module.read_text() and module.read_text().count("TYPE_CHECKING:") == 1
 
 
+def test_a_subclass_with_its_parents_parameters_inherits_the_block_and_one_with_more_gets_its_own(tmp_path,
+                                                                                                  monkeypatch):
+    module = tmp_path / "dampers.py"
+    module.write_text(textwrap.dedent('''\
+        from __future__ import annotations
+
+        import dgraph as dg
+
+
+        class Damper(dg.Entity):
+            """A damper."""
+
+            c = dg.Param(1.0, kind="float")
+
+
+        class QuietDamper(Damper):
+            """The same parameters."""
+
+
+        class TunedDamper(Damper):
+            """One more."""
+
+            k = dg.Param(0.0, kind="float")
+        '''))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert signatures.main(["dampers"]) == 0
+    text = module.read_text()
+    assert text.count("TYPE_CHECKING:  #") == 2  # Damper's and TunedDamper's: QuietDamper inherits Damper's
+    assert "def __init__(self, name: str, *, c: float = 1.0, k: float = 0.0) -> None: ..." in text
+    assert signatures.main(["--check", "dampers"]) == 0
+
+
 def test_a_parameter_type_is_that_of_its_kind_or_its_choices():
     assert signatures.annotation(dg.Param(kind="str_list")) == "Sequence[str]"
     assert signatures.annotation(dg.Param(None, kind="vector")) == "ArrayLike | None"

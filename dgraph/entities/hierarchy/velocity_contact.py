@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Literal
-
 import dgraph as dg
 from dgraph.control.rows import RowBlock
 from dgraph.entities.contacts.contact6d import Contact6d
@@ -27,12 +25,6 @@ class VelocityContact(Contact6d):
     Outputs: those of Contact6d, and ``rows`` (:class:`~dgraph.control.rows.RowBlock`, 6
     equalities over ``v``, none while inactive).
     """
-    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
-        def __init__(
-            self, name: str, *, frame: str, front: float = 0.1, back: float = 0.11, half_width: float = 0.069,
-            mu: float = 0.3, min_normal_force: float = 1.0, max_normal_force: float = 1000.0,
-            force_weight: float = 1e-05, forces: Literal["corners", "wrench"] = "corners",
-        ) -> None: ...
 
     @dg.output(dtype=RowBlock, depends=("contact",))
     def rows(self, t: int) -> RowBlock:
