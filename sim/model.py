@@ -14,6 +14,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from dgraph.entities.robot.loading import file_stamp, is_urdf_path
 from dgraph_sim.conventions import JointMap
 from dgraph_sim.robots import MJCF_TOLERANCE, MjcfError, RobotInfo, compare_dynamics, robot_spec
 from dgraph_sim.scenes import add_scene
@@ -61,8 +62,13 @@ def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collision
     ``mjcf``: an MJCF file describing the robot for MuJoCo (:func:`dgraph_sim.robots.mjcf_spec`;
     relative: to the working directory), checked against the Pinocchio model of ``robot`` by
     :func:`dgraph_sim.robots.compare_dynamics` with ``mjcf_tolerance``; a mismatch raises
-    :class:`~dgraph_sim.robots.MjcfError`. The cache knows the file by its real path, size and
-    modification time, so an edited file is read again."""
+    :class:`~dgraph_sim.robots.MjcfError`. The cache knows the MJCF file, and a URDF file given
+    as ``robot``, by its real path, size and modification time, so an edited file is read again
+    (``package_dirs``: by their absolute paths)."""
+    urdf_stamp = None
+    if is_urdf_path(robot) and os.path.isfile(robot):  # else robot_spec refuses it
+        robot = os.path.realpath(robot)
+        urdf_stamp = file_stamp(robot)
     stamp = None
     if mjcf is not None:
         mjcf = os.path.realpath(mjcf)
@@ -71,13 +77,15 @@ def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collision
         except OSError as exc:
             raise MjcfError(f"cannot read {mjcf}: {exc.strerror}") from None
         stamp = (status.st_size, status.st_mtime_ns)
-    return _load(robot, scene, dt, collisions, tuple(package_dirs), mjcf, stamp, float(mjcf_tolerance))
+    package_dirs = tuple(os.path.abspath(folder) for folder in package_dirs)
+    return _load(robot, scene, dt, collisions, package_dirs, mjcf, stamp, float(mjcf_tolerance), urdf_stamp)
 
 
 @lru_cache(maxsize=16)
 def _load(robot: str, scene: str, dt: float, collisions: str, package_dirs: tuple[str, ...], mjcf: str | None,
-          stamp: tuple[int, int] | None, mjcf_tolerance: float) -> SimModel:
-    """:func:`load`, cached (``stamp``: the MJCF's size and modification time, a key only)."""
+          stamp: tuple[int, int] | None, mjcf_tolerance: float, urdf_stamp: tuple[int, int] | None) -> SimModel:
+    """:func:`load`, cached (``stamp`` and ``urdf_stamp``: the size and modification time of the
+    MJCF and of a URDF ``robot``, keys only)."""
     if not (dt > 0.0 and np.isfinite(dt)):
         raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
     spec, info = robot_spec(robot, dt, collisions, tuple(package_dirs), mjcf)

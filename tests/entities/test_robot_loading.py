@@ -1,5 +1,8 @@
 """describe_robot: an example-robot-data model without its meshes, the same as the loader's."""
 
+import os
+import shutil
+
 import example_robot_data as erd
 import numpy as np
 import pinocchio as pin
@@ -62,3 +65,48 @@ def test_the_free_flyer_test_and_the_loaders_live_in_loading_only():
     twins = [str(path) for root in roots for path in root.rglob("*.py")
              if path.name != "loading.py" and '"JointModelFreeFlyer"' in path.read_text()]
     assert twins == []
+
+
+def _edit(path, old, new):
+    """Rewrite ``path`` with ``old`` replaced (same size) and a later modification time, as an
+    editor saving the file a second later does."""
+    text = path.read_text()
+    assert text.count(old) == 1 and len(old) == len(new)
+    before = path.stat().st_mtime_ns
+    path.write_text(text.replace(old, new))
+    os.utime(path, ns=(before + 1_000_000_000, before + 1_000_000_000))
+
+
+def test_an_edited_urdf_is_read_again(tmp_path):
+    arm = tmp_path / "arm.urdf"
+    shutil.copy(describe_robot("panda").urdf, arm)
+    first = load_model(str(arm))
+    assert first.inertias[1].mass == pytest.approx(4.970684)
+    assert load_model(str(arm)) is first  # unchanged: cached
+    _edit(arm, '<mass value="4.970684"', '<mass value="7.970684"')
+    edited = load_model(str(arm))
+    assert edited.inertias[1].mass == pytest.approx(7.970684)
+    assert load_model(str(arm)) is edited
+
+
+def test_an_edited_urdf_is_drawn_again(tmp_path):
+    arm = tmp_path / "arm.urdf"
+    arm.write_text(_meshless_arm(1.5))
+    assert load_robot(str(arm)).model.inertias[1].mass == pytest.approx(1.5)
+    _edit(arm, 'value="1.5"', 'value="2.5"')
+    robot = load_robot(str(arm))
+    assert robot.model.inertias[1].mass == pytest.approx(2.5) and robot.model is load_model(str(arm))
+
+
+def _meshless_arm(mass: float) -> str:
+    """A one-joint URDF with a box for its geometry (no mesh file)."""
+    inertia = '<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>'
+    box = '<geometry><box size="0.1 0.1 0.4"/></geometry>'
+    return f"""<robot name="arm">
+  <link name="base"><inertial><mass value="1.0"/>{inertia}</inertial></link>
+  <link name="upper"><inertial><mass value="{mass}"/>{inertia}</inertial>
+    <visual>{box}</visual><collision>{box}</collision></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/><axis xyz="0 1 0"/>
+    <limit lower="-2" upper="2" effort="50" velocity="3"/></joint>
+</robot>
+"""

@@ -131,3 +131,20 @@ def test_models_and_meshes_are_loaded_once():
     path = load_robot("panda").urdf
     assert load_model(path) is load_model(path)
     assert load_model("panda") is load_robot("panda").model
+
+
+def test_an_edited_urdf_gives_a_new_simulation_model(tmp_path):
+    share = os.path.realpath(os.path.join(os.path.dirname(load_robot("panda").urdf), "..", "..", "..", ".."))
+    arm = tmp_path / "arm.urdf"
+    shutil.copy(load_robot("panda").urdf, arm)
+    first = load(str(arm), package_dirs=(share,))
+    link1 = mujoco.mj_name2id(first.mj_model, mujoco.mjtObj.mjOBJ_BODY, "panda_link1")
+    assert first.mj_model.body_mass[link1] == pytest.approx(4.970684)
+    assert load(str(arm), package_dirs=(share,)) is first
+    text = arm.read_text()
+    before = arm.stat().st_mtime_ns
+    arm.write_text(text.replace('<mass value="4.970684"', '<mass value="7.970684"'))  # same size
+    os.utime(arm, ns=(before + 1_000_000_000, before + 1_000_000_000))  # saved a second later
+    edited = load(str(arm), package_dirs=(share,))
+    assert edited.mj_model.body_mass[link1] == pytest.approx(7.970684)
+    assert edited.pin_model.inertias[1].mass == pytest.approx(7.970684)

@@ -1,8 +1,9 @@
 """Robot sources: an example-robot-data name (``talos``, ``panda``, ``ur5``) or the path of a URDF file.
 
 :func:`load_model` gives the Pinocchio model of either (cached per process, shared, never to be
-modified); :func:`load_robot` the model with its visual and collision geometry (meshes read once
-per process, for a 3D view). A source is a path when it ends in ``.urdf`` or names a file;
+modified; a URDF file is known by its real path, size and modification time, so an edited file
+is read again); :func:`load_robot` the model with its visual and collision geometry (meshes read
+once per process, for a 3D view). A source is a path when it ends in ``.urdf`` or names a file;
 anything else is a robot name, checked against example-robot-data's list (an unknown name is
 refused with the closest names).
 
@@ -78,9 +79,23 @@ def load_model(model: Any, entity: str | None = None) -> pin.Model:
         raise ParamError(f"{prefix}cannot load robot model {model!r}: {exc}", entity=entity) from None
 
 
-@functools.lru_cache(maxsize=8)
+def file_stamp(path: str) -> tuple[int, int]:
+    """The size and modification time (ns) of the file at ``path``: with its real path, the key
+    under which what is read from it is cached, so that an edited file is read again."""
+    status = os.stat(path)
+    return status.st_size, status.st_mtime_ns
+
+
 def _urdf_model(path: str) -> pin.Model:
-    """The kinematics and dynamics of a URDF file (fixed base; no meshes are read)."""
+    """The kinematics and dynamics of the URDF file at the real path ``path`` (fixed base; no
+    meshes are read), cached on the file's size and modification time: an edited file is parsed
+    again."""
+    return _parsed_urdf(path, file_stamp(path))
+
+
+@functools.lru_cache(maxsize=8)
+def _parsed_urdf(path: str, stamp: tuple[int, int]) -> pin.Model:
+    """:func:`_urdf_model`, cached (``stamp``: a key only)."""
     return pin.buildModelFromUrdf(path)
 
 
@@ -147,7 +162,6 @@ def _read_srdf(loader: type, model: pin.Model) -> Any:
     return readParamsFromSrdf(model, srdf, False, loader.has_rotor_parameters, loader.ref_posture)
 
 
-@functools.lru_cache(maxsize=8)
 def load_robot(name: str) -> Any:
     """The model with its collision and visual geometry, cached per process and shared by every
     entity that names the robot (the kinematics, the 3D view): reading TALOS's meshes takes
@@ -156,11 +170,24 @@ def load_robot(name: str) -> Any:
     ``name``: an example-robot-data name (the meshes of :func:`describe_robot`'s model, or
     ``example_robot_data.load(name)`` for a loader that builds its model itself) or a URDF path (a
     ``pinocchio.RobotWrapper``, meshes looked for as :func:`package_dirs_of` says; its ``model``
-    is :func:`load_model`'s, so the URDF is parsed once).
+    is :func:`load_model`'s, so the URDF is parsed once; an edited file is read again, as by
+    :func:`load_model`).
     """
     if is_urdf_path(name):
         path = os.path.realpath(check_source(name))
-        return _with_meshes(_urdf_model(path), path, package_dirs_of(path))
+        return _urdf_robot(path, file_stamp(path))
+    return _named_robot(name)
+
+
+@functools.lru_cache(maxsize=8)
+def _urdf_robot(path: str, stamp: tuple[int, int]) -> pin.RobotWrapper:
+    """The URDF file at the real path ``path`` with its meshes, cached (``stamp``: a key only)."""
+    return _with_meshes(_urdf_model(path), path, package_dirs_of(path))
+
+
+@functools.lru_cache(maxsize=8)
+def _named_robot(name: str) -> Any:
+    """An example-robot-data robot with its meshes, cached (see :func:`load_robot`)."""
     described = describe_robot(name)
     if described.visual_model is not None:  # its loader read the meshes already
         return described
