@@ -22,6 +22,7 @@ from dgraph.entities.robot import load_robot
 from dgraph_sim.conventions import JointMap, quat_wxyz_from_xyzw, quat_xyzw_from_wxyz
 from dgraph_sim.model import load
 from dgraph_sim.robots import SOLE_HALF_SIZE
+from tests.sim.conftest import mass_matrices
 
 
 @pytest.fixture(scope="module")
@@ -51,15 +52,8 @@ def test_mass_matrix_and_bias_forces_match_pinocchio(talos):
     d, data = mujoco.MjData(m), model.createData()
     errors = {"M": 0.0, "nle": 0.0, "rnea": 0.0, "nle_without_tdot": 0.0}
     for q, v, a in random_states(model, 6):
-        jm.qpos_from_q(q, d.qpos)
-        jm.qvel_from_v(q, v, d.qvel)
-        mujoco.mj_forward(m, d)
-        M = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(m, d, M)
-        T = jm.velocity_transform(q)
-        M_pin = pin.crba(model, data, q)
-        M_pin = np.triu(M_pin) + np.triu(M_pin, 1).T
-        errors["M"] = max(errors["M"], np.abs(T.T @ M @ T - M_pin).max())
+        M_mujoco, M_pin, M, T = mass_matrices(talos, d, data, q, v)
+        errors["M"] = max(errors["M"], np.abs(M_mujoco - M_pin).max())
         nle = pin.nonLinearEffects(model, data, q, v)
         errors["nle"] = max(errors["nle"], np.abs(T.T @ (d.qfrc_bias + M @ tdot_v(T, v)) - nle).max())
         errors["nle_without_tdot"] = max(errors["nle_without_tdot"], np.abs(T.T @ d.qfrc_bias - nle).max())
