@@ -14,7 +14,9 @@
 scripts (``--save``, ``--serve``; ``--spawn`` opens a viewer) and its server's (``--bind``,
 ``--port`` for gRPC, ``--web-viewer-port``); without one, ``run`` saves ``out/NAME.rrd`` unless
 the file chooses its recorders' sinks. Output piped into a command that stops reading
-(``dgraph entities | head -1``) ends the command quietly, with status 0.
+(``dgraph entities | head -1``) ends the command quietly, with status 0. SIGTERM and SIGHUP
+(``kill``, ``timeout``, systemd, a closed terminal) end it as Ctrl-C does: a run stops after its
+tick, what it recorded is closed, its Rerun servers stop, and the status is 128 + the signal's number.
 
 Values given to ``--set`` are parsed as YAML scalars or flow lists (``1.5``, ``[0, 0.05, 0]``,
 ``true``), with the same safe loader as graph files. Errors print one line naming the file,
@@ -24,11 +26,15 @@ line, entity and signal, and exit with status 2.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import select
+import signal
 import sys
+import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -39,6 +45,8 @@ if TYPE_CHECKING:
 
 EXIT_ERROR = 2
 PROFILE_TICKS = 1000  # what `profile` times when neither the command line nor the file gives a length
+TERMINATIONS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+"""The signals that end a command as Ctrl-C does (:func:`terminations_as_ctrl_c`)."""
 
 
 def version() -> str:
@@ -125,10 +133,45 @@ def cmd_run(args: argparse.Namespace) -> int:
                 while any(server.running() for server in servers):
                     time.sleep(0.2)
             except KeyboardInterrupt:
-                print("Ctrl-C: stopped serving", file=sys.stderr)
+                print(f"{_interruption(args)}: stopped serving", file=sys.stderr)
                 return code
             print("the Rerun server stopped", file=sys.stderr)
     return code
+
+
+def _interruption(args: argparse.Namespace) -> str:
+    """What interrupted the command: the name of the termination signal it received, else Ctrl-C."""
+    received = getattr(args, "terminated_by", [])
+    return signal.Signals(received[0]).name if received else "Ctrl-C"
+
+
+@contextlib.contextmanager
+def terminations_as_ctrl_c() -> Iterator[list[int]]:
+    """Within the block, SIGTERM and SIGHUP do what SIGINT (Ctrl-C) does: whatever handles SIGINT
+    at that moment is called (a run stops after its tick, see ``dgraph.loop``; elsewhere
+    ``KeyboardInterrupt`` is raised), so ``finally`` blocks run and Rerun servers stop; Python's
+    default would end the process at once and leave them running. Yields the signals received, in
+    order. Only in the main thread (elsewhere signals cannot be handled); the handlers are restored
+    after the block."""
+    received: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+
+    def as_ctrl_c(signum: int, frame: Any) -> None:
+        received.append(signum)
+        handler = signal.getsignal(signal.SIGINT)
+        if callable(handler):
+            handler(signal.SIGINT, frame)
+        else:  # SIGINT ignored or left to the system: still end the command, cleanly
+            raise KeyboardInterrupt
+
+    previous = {signum: signal.signal(signum, as_ctrl_c) for signum in TERMINATIONS}
+    try:
+        yield received
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -336,8 +379,17 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``dgraph`` command."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    with terminations_as_ctrl_c() as args.terminated_by:
+        code = _main(args)
+    if args.terminated_by:  # also when the command ended normally on it (--keep-serving)
+        return 128 + args.terminated_by[0]
+    return code
+
+
+def _main(args: argparse.Namespace) -> int:
+    """Run the subcommand of ``args``; its exit status, errors reported as one line."""
     try:
-        code = args.func(args)
+        code = int(args.func(args))
         sys.stdout.flush()  # a broken pipe shows here, not at exit
         return code
     except BrokenPipeError as exc:  # before OSError, which it is
@@ -353,7 +405,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"dgraph {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+        print("interrupted" if not args.terminated_by else f"{_interruption(args)}: interrupted", file=sys.stderr)
         return 130
 
 

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import os
+import select
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -207,6 +211,108 @@ def test_bind_and_ports_choose_where_serve_listens(ports, monkeypatch, capsys):
 def test_keep_serving_without_a_server_says_so_and_ends(tmp_path, capsys):
     assert main(["run", PD, "--ticks", "5", "-q", "--no-rerun", "--keep-serving"]) == 0
     assert "--keep-serving: nothing is served" in capsys.readouterr().err
+
+
+def serve_and_keep(tmp_path: Path, grpc: int, web: int, ticks: int = 500) -> subprocess.Popen[bytes]:
+    """``dgraph run`` of the PD loop serving on ``grpc`` and ``web`` with ``--keep-serving`` (binary pipes)."""
+    exe = Path(sys.executable).with_name("dgraph")
+    return subprocess.Popen([str(exe), "run", PD, "--ticks", str(ticks), "-q", "--serve", "--port", str(grpc),
+                             "--web-viewer-port", str(web), "--keep-serving"],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=tmp_path)
+
+
+def read_until(process: subprocess.Popen[bytes], text: str, timeout: float) -> str:
+    """What ``process`` printed on its standard error (a binary pipe) until a whole line holding
+    ``text`` came (that line and what came with it); fails naming what it printed if that takes
+    over ``timeout`` seconds or the process ends first (never blocks past the deadline: ``select``)."""
+    assert process.stderr is not None
+    fd, said, deadline = process.stderr.fileno(), b"", time.monotonic() + timeout
+    while b"\n" not in said.partition(text.encode())[2]:  # until text and the end of its line
+        left = deadline - time.monotonic()
+        if left <= 0:
+            pytest.fail(f"no {text!r} from {process.args} after {timeout:g} s; it printed: {said.decode()!r}")
+        if select.select([fd], [], [], left)[0]:
+            chunk = os.read(fd, 1 << 16)
+            if not chunk:
+                pytest.fail(f"{process.args} ended (status {process.wait()}) before {text!r}: {said.decode()!r}")
+            said += chunk
+    return said.decode()
+
+
+def stop_cli(process: subprocess.Popen[bytes], grpc: int | None = None) -> None:
+    """End ``process`` (a ``dgraph run``) if it still runs: SIGTERM first, which stops its Rerun
+    servers, then SIGKILL if it has not ended 10 s later; close its pipes. With ``grpc``, also kill
+    a Rerun server left serving on that port (what a failure of the code under test would leave)."""
+    if process.poll() is None:
+        process.terminate()
+        try:
+            process.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+    for pipe in (process.stdout, process.stderr):
+        if pipe is not None:
+            pipe.close()
+    for pid in _rerun_servers_on(grpc) if grpc is not None else []:
+        os.kill(pid, signal.SIGKILL)
+
+
+def wait_closed(ports: tuple[int, ...], timeout: float) -> float:
+    """Seconds until nothing listens on ``ports`` (any process, any address); fails after ``timeout``."""
+    from tests.entities.test_rerun_stream import listening
+
+    start = time.monotonic()
+    while any(listening(port) for port in ports):
+        if time.monotonic() - start > timeout:
+            pytest.fail(f"still listening after {timeout:g} s: {[(p, listening(p)) for p in ports]}")
+        time.sleep(0.05)
+    return time.monotonic() - start
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
+def test_a_terminated_run_stops_its_rerun_server_and_exits_128_plus_the_signal(tmp_path, ports, signum):
+    """``kill``, ``timeout``, systemd (SIGTERM) and a closed terminal (SIGHUP) end ``dgraph run``
+    as Ctrl-C does: its ``finally`` blocks run, the Rerun server stops, the ports are free."""
+    from tests.entities.test_rerun_stream import listening
+
+    grpc, web = ports
+    run = serve_and_keep(tmp_path, grpc, web)
+    try:
+        read_until(run, "until Ctrl-C", timeout=60)
+        assert listening(grpc) and listening(web)
+        run.send_signal(signum)
+        assert run.wait(timeout=10) == 128 + signum
+        assert f"{signal.Signals(signum).name}: stopped serving" in run.stderr.read().decode()
+        assert wait_closed((grpc, web), timeout=0.5) < 0.5  # stopped before the command ended
+    finally:
+        stop_cli(run, grpc)
+
+
+def test_a_killed_run_takes_its_rerun_server_with_it(tmp_path, ports):
+    """SIGKILL runs no Python at all: the server, told by the kernel to die with its parent
+    (PR_SET_PDEATHSIG), ends anyway and frees the ports for the next ``--serve``."""
+    grpc, web = ports
+    run = serve_and_keep(tmp_path, grpc, web)
+    try:
+        read_until(run, "until Ctrl-C", timeout=60)
+        run.kill()
+        run.wait(timeout=10)
+        wait_closed((grpc, web), timeout=5)
+    finally:
+        stop_cli(run, grpc)
+
+
+def _rerun_servers_on(grpc: int) -> list[int]:
+    """The pids of the ``rerun --serve-web`` processes started with ``--port grpc``."""
+    found = []
+    for proc in Path("/proc").iterdir():
+        try:
+            argv = (proc / "cmdline").read_bytes()
+        except OSError:
+            continue
+        if b"\0--serve-web\0" in argv and f"\0--port\0{grpc}\0".encode() in argv:
+            found.append(int(proc.name))
+    return found
 
 
 def test_run_a_10000_deep_chain(tmp_path):
