@@ -200,14 +200,28 @@ def _run(args: argparse.Namespace) -> int:
               f"(real-time factor {simulated / wall if wall > 0 else float('inf'):.1f})")
         _print_faults(graph)
         for entity in graph:
-            video = getattr(entity, "video_path", None)
-            if isinstance(video, str) and Path(video).is_file():
+            video = _video_written(entity)
+            if video is not None:
                 print(f"  {entity.name}: video -> {video}")
             if entity.type_name == "Recorder":
                 for label, target in (("rerun", entity.rrd_path), ("npz", entity.npz_path)):
                     if target and (label == "npz" or entity.rerun == "save") and Path(target).is_file():
                         print(f"  {entity.name}: {label} -> {target}")
     return 0
+
+
+def _video_written(entity: Any) -> str | None:
+    """The video file this run of ``entity`` (a device with ``write_video()``, e.g. a MujocoDevice)
+    wrote: what its ``write_video()`` returns once the device is closed (idempotent: the path, or
+    ``None`` if it took no frame or failed), not whether a file is there (an earlier run's)."""
+    write_video = getattr(entity, "write_video", None)
+    if not callable(write_video):
+        return None
+    try:
+        written = write_video()
+    except DGraphError:  # a video that failed: reported by the close that failed
+        return None
+    return written if isinstance(written, str) else None
 
 
 def _print_faults(graph: Graph) -> None:

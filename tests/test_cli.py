@@ -477,6 +477,10 @@ def test_video_films_every_mujoco_device_of_the_file(tmp_path):
     assert "device: video -> film/standing.gif" in result.stdout
     with Image.open(tmp_path / "film" / "standing.gif") as video:
         assert video.size == (32, 24) and video.n_frames == 6  # 60 ms at 100 frames per second
+    again = dgraph_cli("run", str(ROOT / "graphs" / "talos_standing.yaml"), "--ticks", "5", "-q", "--no-rerun",
+                       "--video", "film/standing.gif", "--set", "device.video_start=1.0", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert "video ->" not in again.stdout, again.stdout  # no frame this run: the file there is the last run's
     result = dgraph_cli("run", PD, "--ticks", "5", "--video", "pd.gif", cwd=tmp_path)
     assert result.returncode == 2
     assert f"{PD}: --video pd.gif: the graph has no MujocoDevice to film" in result.stderr
