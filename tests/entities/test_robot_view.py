@@ -222,9 +222,9 @@ def test_the_kinematics_and_the_3d_view_share_one_load_of_the_robot():
 def test_a_view_that_records_nothing_reads_no_mesh():
     """With Rerun off (the library's default) the view loads the kinematics only; its meshes are
     read when it first draws (here: asked for its links)."""
-    from dgraph.entities.robot.loading import load_robot
+    from dgraph.entities.robot.loading import robots_with_meshes  # load_robot's cache
 
-    load_robot.cache_clear()
+    robots_with_meshes.cache_clear()
     view = RobotView("view", model="ur5", rerun="off")
-    assert view.nq == 6 and load_robot.cache_info().currsize == 0
-    assert len(view.links) > 0 and load_robot.cache_info().currsize == 1
+    assert view.nq == 6 and robots_with_meshes.cache_info().currsize == 0
+    assert len(view.links) > 0 and robots_with_meshes.cache_info().currsize == 1

@@ -175,20 +175,17 @@ def load_robot(name: str) -> Any:
     """
     if is_urdf_path(name):
         path = os.path.realpath(check_source(name))
-        return _urdf_robot(path, file_stamp(path))
-    return _named_robot(name)
+        return robots_with_meshes(path, file_stamp(path))
+    return robots_with_meshes(name, None)
 
 
 @functools.lru_cache(maxsize=8)
-def _urdf_robot(path: str, stamp: tuple[int, int]) -> pin.RobotWrapper:
-    """The URDF file at the real path ``path`` with its meshes, cached (``stamp``: a key only)."""
-    return _with_meshes(_urdf_model(path), path, package_dirs_of(path))
-
-
-@functools.lru_cache(maxsize=8)
-def _named_robot(name: str) -> Any:
-    """An example-robot-data robot with its meshes, cached (see :func:`load_robot`)."""
-    described = describe_robot(name)
+def robots_with_meshes(source: str, stamp: tuple[int, int] | None) -> Any:
+    """:func:`load_robot`'s cache: ``source``, a robot name (``stamp`` None) or the real path of a
+    URDF file (``stamp``: its size and modification time, a key only), with its meshes."""
+    if stamp is not None:
+        return _with_meshes(_urdf_model(source), source, package_dirs_of(source))
+    described = describe_robot(source)
     if described.visual_model is not None:  # its loader read the meshes already
         return described
     robot = _with_meshes(described.model, described.urdf, [described.package_dir])
