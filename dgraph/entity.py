@@ -40,8 +40,8 @@ def command(fn: F) -> F:
 
 
 _ANNOTATIONS: dict[str, Any] = {
-    "float": float, "int": int, "bool": bool, "str": str, "path": str, "vector": "Sequence[float]",
-    "str_list": list[str], "int_list": list[int], "object": Any,
+    "float": float, "int": int, "bool": bool, "str": str, "path": str, "name_or_path": str | Any,
+    "vector": "Sequence[float]", "str_list": list[str], "path_list": list[str], "int_list": list[int], "object": Any,
 }
 """The type shown in an entity's signature for each parameter kind."""
 

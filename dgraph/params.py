@@ -66,6 +66,12 @@ def _to_str_list(v: Any) -> list[str]:
     return list(v)
 
 
+def _to_name_or_path(v: Any) -> Any:
+    if isinstance(v, bytes):
+        raise TypeError("expected a name or a path, got bytes")
+    return v  # a string; or an object built in Python (a pinocchio.Model), for the entity to check
+
+
 def _to_int_list(v: Any) -> list[int]:
     if isinstance(v, str) or not isinstance(v, (Sequence, np.ndarray)):
         raise TypeError(f"expected a list of ints, got {type(v).__name__}")
@@ -74,8 +80,8 @@ def _to_int_list(v: Any) -> list[int]:
 
 KINDS: dict[str, Callable[[Any], Any]] = {
     "float": _to_float, "int": _to_int, "bool": _to_bool, "str": _to_str, "path": _to_str,
-    "vector": _to_vector, "str_list": _to_str_list, "int_list": _to_int_list,
-    "object": lambda v: v,
+    "name_or_path": _to_name_or_path, "vector": _to_vector, "str_list": _to_str_list, "path_list": _to_str_list,
+    "int_list": _to_int_list, "object": lambda v: v,
 }
 
 
@@ -85,9 +91,15 @@ class Param:
     Args:
         default: value when not given (omit for a required parameter).
         kind: ``float``, ``int``, ``bool``, ``str``, ``path`` (an input file: a relative path
-            in a graph file is taken from the file's folder), ``vector`` (numbers -> ndarray),
-            ``str_list``, ``int_list`` or ``object`` (anything; not saveable to a graph file
-            unless it is plain data).
+            in a graph file is taken from the file's folder, and written relative to the folder
+            of the file a graph is saved to; in Python, from the working directory),
+            ``name_or_path`` (a name, or the path of a file, taken as ``path``'s: a string with
+            a folder separator or a suffix such as ``.urdf``, or naming a file, is a path; any
+            other string a name, kept as it is; a value built in Python that is not a string,
+            such as a ``pinocchio.Model``, is passed as it is for the entity to check),
+            ``vector`` (numbers -> ndarray), ``str_list``, ``path_list`` (strings, each a path
+            taken as ``path``'s, a folder as well as a file), ``int_list`` or ``object``
+            (anything; not saveable to a graph file unless it is plain data).
         doc: one line shown by ``dgraph entities``.
         choices: allowed values.
         optional: ``None`` is accepted in addition to ``kind``.

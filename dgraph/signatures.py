@@ -37,8 +37,9 @@ from dgraph.params import Param
 from dgraph.registry import entity_types
 
 TYPES: dict[str, str] = {
-    "float": "float", "int": "int", "bool": "bool", "str": "str", "path": "str", "vector": "ArrayLike",
-    "str_list": "Sequence[str]", "int_list": "Sequence[int]", "object": "Any",
+    "float": "float", "int": "int", "bool": "bool", "str": "str", "path": "str", "name_or_path": "str | Any",
+    "vector": "ArrayLike", "str_list": "Sequence[str]", "path_list": "Sequence[str]", "int_list": "Sequence[int]",
+    "object": "Any",
 }
 """The type a type checker sees for each parameter kind (what the constructor accepts:
 a ``vector`` is any array-like, converted to an ndarray)."""

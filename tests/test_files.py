@@ -92,6 +92,80 @@ def test_overrides_set_parameters_and_constants():
         loads(GOOD, overrides={"nope.x": 1})
 
 
+@dg.register(name="TestNamesAndPaths")
+class NamesAndPaths(dg.Entity):
+    """A name or a file's path, and folders: what a robot's ``model`` and ``package_dirs`` are."""
+
+    model = dg.Param("talos", kind="name_or_path")
+    package_dirs = dg.Param([], kind="path_list")
+
+
+NAMES_AND_PATHS = """\
+name: names_and_paths
+robot: arm.urdf
+entities:
+  a: {type: TestNamesAndPaths, params: {package_dirs: [meshes, ../shared]}}
+  b: {type: TestNamesAndPaths, params: {model: talos}}
+  c: {type: TestNamesAndPaths, params: {model: sub/other.urdf}}
+"""
+
+
+def _project(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A graph file in ``tmp_path/project`` naming files next to it; the working directory elsewhere."""
+    project = tmp_path / "project"
+    for folder in (project / "sub", project / "meshes", project / "talos", tmp_path / "shared", tmp_path / "cwd"):
+        folder.mkdir(parents=True)  # project/talos: a folder, so 'talos' stays a name
+    (project / "arm.urdf").write_text("<robot/>")
+    (project / "sub" / "other.urdf").write_text("<robot/>")
+    (project / "g.yaml").write_text(NAMES_AND_PATHS)
+    monkeypatch.chdir(tmp_path / "cwd")
+    return project
+
+
+def test_a_robot_a_name_or_path_and_a_path_list_are_taken_from_the_files_folder(tmp_path, monkeypatch):
+    project = _project(tmp_path, monkeypatch)
+    graph = dg.load(project / "g.yaml")
+    assert graph["a"].model == str(project / "arm.urdf")  # robot: a path, from the file's folder
+    assert graph["a"].package_dirs == [str(project / "meshes"), str(tmp_path / "shared")]
+    assert graph["b"].model == "talos"  # a name stays a name
+    assert graph["c"].model == str(project / "sub" / "other.urdf")
+
+
+def test_names_and_paths_are_saved_relative_to_the_saved_file_a_fixed_point(tmp_path, monkeypatch):
+    project = _project(tmp_path, monkeypatch)
+    first = dg.load(project / "g.yaml")
+    (tmp_path / "out").mkdir()
+    dg.save(first, tmp_path / "out" / "x.yaml")
+    written = (tmp_path / "out" / "x.yaml").read_text()
+    assert "robot: ../project/arm.urdf" in written and "model: talos" in written
+    assert "package_dirs: [../project/meshes, ../shared]" in written and "model: ../project/sub/other.urdf" in written
+    second = dg.load(tmp_path / "out" / "x.yaml")
+    assert [e.params for e in second] == [e.params for e in first]
+    (tmp_path / "out2").mkdir()
+    dg.save(second, tmp_path / "out2" / "y.yaml")
+    assert (tmp_path / "out2" / "y.yaml").read_text() == written
+
+
+def test_a_robot_path_of_a_base_file_is_the_base_files(tmp_path, monkeypatch):
+    """``extends``: the base's ``robot`` is taken from the base's folder, written from the top file's."""
+    project = _project(tmp_path, monkeypatch)
+    (tmp_path / "top.yaml").write_text("extends: project/g.yaml\nname: top\n")
+    assert dg.files.parse((tmp_path / "top.yaml").read_text(), str(tmp_path / "top.yaml"))["robot"] == \
+        "project/arm.urdf"
+    assert dg.load(tmp_path / "top.yaml")["a"].model == str(project / "arm.urdf")
+
+
+def test_in_python_and_with_set_a_path_is_the_working_directorys(tmp_path, monkeypatch):
+    project = _project(tmp_path, monkeypatch)
+    assert NamesAndPaths("p", model="arm.urdf", package_dirs=["meshes"]).params == \
+        {"model": "arm.urdf", "package_dirs": ["meshes"]}
+    with pytest.raises(dg.GraphFileError, match=r"--set b.model.*cannot read data file 'arm.urdf'"):
+        dg.load(project / "g.yaml", {"b.model": "arm.urdf"})  # not in the working directory
+    monkeypatch.chdir(project)
+    assert dg.load(project / "g.yaml", {"b.model": "arm.urdf", "b.package_dirs": ["meshes"]})["b"].params == \
+        {"model": "arm.urdf", "package_dirs": ["meshes"]}
+
+
 def test_unsaveable_parameter_is_reported():
     import pinocchio as pin
 

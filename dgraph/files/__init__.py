@@ -16,7 +16,9 @@ A graph file::
 
 ``set`` names input constants and parameters alike (``entity.name: value``, as
 ``dgraph run --set``). ``robot: talos`` gives its model to every entity with a ``model``
-parameter that does not set its own.
+parameter that does not set its own; ``robot: arm.urdf``, a path, is taken from the file's
+folder, as every path a file gives (``path``, ``name_or_path`` and ``path_list`` parameters:
+``mjcf``, a ``model`` that is a URDF path, ``package_dirs``).
 
 A file can build on another: ``extends`` (a path relative to the file; chains of at most
 ``MAX_EXTENDS`` files, no cycles) applies the file, in this order, to the graph the base
@@ -56,7 +58,7 @@ The package, one concept a module: :mod:`~dgraph.files.source` (the text read sa
 converted to plain data with its line map, the places errors point at),
 :mod:`~dgraph.files.schema` (what one file may say), :mod:`~dgraph.files.composition` (a chain
 of files laid over one another; ``parse``), :mod:`~dgraph.files.build` (the graph built from
-a composition; ``load``, ``loads``, ``check``), :mod:`~dgraph.files.paths` (``path``
+a composition; ``load``, ``loads``, ``check``), :mod:`~dgraph.files.paths` (paths in
 parameters from and to a file's folder) and :mod:`~dgraph.files.writing` (``dumps``, ``save``).
 """
 

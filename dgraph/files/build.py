@@ -11,7 +11,7 @@ from typing import Any
 
 from dgraph.errors import DGraphError, GraphError, GraphFileError, ParamError
 from dgraph.files.composition import Composition, EntitySpec, Setting, compose, owner, split_settings, suggest
-from dgraph.files.paths import check_data_file, from_file
+from dgraph.files.paths import ROBOT, check_data_file, from_file
 from dgraph.files.source import At, latest, read_text
 from dgraph.graph import Graph
 from dgraph.params import Param
@@ -72,6 +72,8 @@ def _build(composition: Composition, file: str, refused: Refused | None = None) 
     params, constants = split_settings(composition.sets, entities)
     graph = _new_graph(composition, file)
     robot = composition.scalars.get("robot")
+    if robot is not None:  # a name, or a path from the folder of the file that gives it
+        robot = (from_file(robot[0], ROBOT, robot[1].doc), robot[1])
     for name, spec in entities.items():
         graph.add(_make_entity(name, spec, params.get(name, {}), robot))
     _plug(graph, composition, entities, refused)

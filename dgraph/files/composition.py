@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from dgraph.errors import DGraphError, GraphFileError
-from dgraph.files.paths import from_file, relative
+from dgraph.files.paths import ROBOT, from_file, relative
 from dgraph.files.schema import PLUG_RE, validate
 from dgraph.files.source import (
     COMMAND_LINE,
@@ -256,6 +256,9 @@ class Composition:
         """The plain data of one file, in the top file's folder, that describes this graph."""
         params, constants = split_settings(self.sets, self.entities)
         data: dict[str, Any] = {key: self.scalars[key][0] for key in SCALARS if key in self.scalars}
+        if "robot" in self.scalars:  # a name, or a path: from the top file's folder
+            robot, at = self.scalars["robot"]
+            data["robot"] = relative(from_file(robot, ROBOT, at.doc), ROBOT, self.top.folder)
         data["entities"] = {name: _flat_entity(spec, params.get(name, {}), self.top.folder)
                             for name, spec in self.entities.items()}
         if self.plugs:
@@ -315,7 +318,8 @@ def _flat_entity(spec: EntitySpec, settings: dict[str, Setting], folder: Path | 
 def parse(text: str, file: str = "<string>") -> dict[str, Any]:
     """The graph that graph-file text describes, as the plain data of one file without
     ``extends`` (the files it extends composed, parameters given by ``set`` folded into their
-    entities, ``path`` parameters relative to the file's folder). Its pieces come from several
+    entities, paths (of ``path``, ``name_or_path`` and ``path_list`` parameters, and a ``robot``
+    that is one) relative to the file's folder). Its pieces come from several
     files, so it has no line map: errors found later are located by :func:`~dgraph.files.loads`.
 
     The YAML, the schema and what ``remove`` names are checked here; types, parameters and

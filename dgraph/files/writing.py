@@ -1,5 +1,5 @@
 """Writing a built graph back as a graph file: its entities, plugs and constants as plain data,
-the robot named once, ``path`` parameters relative to the file's folder."""
+the robot named once, paths relative to the file's folder."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 import yaml
 
 from dgraph.errors import GraphError
-from dgraph.files.paths import relative
+from dgraph.files.paths import ROBOT, relative
 from dgraph.graph import Graph
 
 
@@ -32,15 +32,16 @@ def to_plain(value: Any, where: str) -> Any:
 
 def dumps(graph: Graph, folder: str | Path | None = None) -> str:
     """The graph-file text of ``graph``: the robot named once (``robot``, for every ``model``
-    that is that robot), ``path`` parameters relative to ``folder`` (default: the working
-    directory, where :func:`~dgraph.files.loads` without a file name looks for them)."""
+    that is that robot), paths (``path``, ``name_or_path`` and ``path_list`` parameters, a
+    ``robot`` that is a path) relative to ``folder`` (default: the working directory, where
+    :func:`~dgraph.files.loads` without a file name looks for them)."""
     robot = _robot(graph)
     folder = Path(folder) if folder is not None else None
     data: dict[str, Any] = {"name": graph.name, "dt": graph.dt}
     if graph.duration is not None:
         data["duration"] = graph.duration
     if robot is not None:
-        data["robot"] = robot
+        data["robot"] = relative(robot, ROBOT, folder)
     data["entities"] = {e.name: _saved_entity(e, robot, folder) for e in graph}
     data["plugs"] = [f"{a} -> {b}" for a, b in graph.plugs()]
     constants = {inp.full_name: to_plain(inp.value, inp.full_name)
