@@ -30,7 +30,7 @@ import math
 import os
 from collections.abc import Sequence
 from fractions import Fraction
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import mujoco
 import numpy as np
@@ -133,9 +133,10 @@ class MujocoDevice(dg.Device):
     (``DISPLAY`` or ``WAYLAND_DISPLAY``), else the device is refused with a ``ParamError``.
     """
 
-    model = dg.Param("talos", kind="str", doc="example-robot-data robot name (talos, panda, ur5...) or URDF path")
-    package_dirs = dg.Param([], kind="str_list", doc="folders holding the packages of a URDF's package:// meshes "
-                            "(besides the URDF's folder and its ancestors)")
+    model = dg.Param("talos", kind="name_or_path", doc="example-robot-data robot name (talos, panda, ur5...) or "
+                     "URDF path (in a graph file, relative to its folder)")
+    package_dirs = dg.Param([], kind="path_list", doc="folders holding the packages of a URDF's package:// meshes "
+                            "(besides the URDF's folder and its ancestors; in a graph file, relative to its folder)")
     mjcf = dg.Param(None, kind="path", doc="MJCF file describing the robot for MuJoCo (Pinocchio keeps model); "
                     "joints matched by name, masses checked (in a graph file, relative to its folder)")
     mjcf_tolerance = dg.Param(MJCF_TOLERANCE, kind="float", minimum=0.0, doc="relative tolerance of the check "
@@ -170,7 +171,7 @@ class MujocoDevice(dg.Device):
                             "side view tracking its CoM, or fixed in front of the origin")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: str = "talos", package_dirs: Sequence[str] = (), mjcf: str | None = None,
+            self, name: str, *, model: str | Any = "talos", package_dirs: Sequence[str] = (), mjcf: str | None = None,
             mjcf_tolerance: float = 0.01, scene: Literal["flat", "block", "stairs", "slope", "push"] = "flat",
             collisions: Literal["feet", "all"] = "all", control_mode: Literal["torque", "position"] = "torque",
             kp: ArrayLike | None = None, kd: ArrayLike | None = None, q0: ArrayLike | None = None,

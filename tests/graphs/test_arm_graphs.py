@@ -8,6 +8,10 @@ the path of the Panda's URDF file (no SRDF: the posture and ``q0`` are set).
 
 from __future__ import annotations
 
+import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -81,18 +85,49 @@ def test_torques_stay_within_the_urdf_limits_and_everything_is_finite(reach):
     assert len(rec["fault_tick"]) == 0
 
 
-def test_a_urdf_path_runs_the_same_reach(tmp_path):
-    urdf = load_robot("panda").urdf                              # the installed file: nothing is downloaded
+def urdf_reach(robot: str, device: str = "") -> str:
+    """``panda_reach.yaml`` with ``robot`` a URDF path (no SRDF: the posture and ``q0`` set) and
+    ``device`` added to the device's parameters."""
     default = np.array(load_robot("panda").q0)
     text = (ROOT / "graphs" / "panda_reach.yaml").read_text()
-    text = text.replace("robot: panda ", f"robot: {urdf} ")
+    text = text.replace("robot: panda ", f"robot: {robot} ")
     text = text.replace("params: {reference_configuration: default}", "params: {reference_configuration: ''}")
-    text = text.replace("control_mode: torque}", f"control_mode: torque, q0: {default.tolist()}}}")
-    text = text.replace("record: [", f"  posture.reference: {default.tolist()}\nrecord: [")
+    text = text.replace("control_mode: torque}", f"control_mode: torque, q0: {default.tolist()}{device}}}")
+    return text.replace("record: [", f"  posture.reference: {default.tolist()}\nrecord: [")
+
+
+def test_a_urdf_path_runs_the_same_reach(tmp_path):
+    urdf = load_robot("panda").urdf                              # the installed file: nothing is downloaded
     graph_file = tmp_path / "panda_urdf_reach.yaml"
-    graph_file.write_text(text)
+    graph_file.write_text(urdf_reach(urdf))
     graph, rec, _ = run(tmp_path, graph_file)
     assert graph["device"].model == urdf and graph["robot"].model == urdf
     error = np.linalg.norm(tool_positions(graph, rec["device.q"]) - TARGET, axis=1)
     assert error[rec["time"] >= 2.3].max() < 1e-3
     assert not rec["solver.status"].any() and np.isfinite(rec["device.joint_torque"]).all()
+
+
+def test_a_urdf_next_to_the_graph_file_is_found_from_any_working_directory(tmp_path):
+    """``robot: arm.urdf`` and ``package_dirs: [deps]`` are the graph file's, as ``mjcf`` is: checked
+    from another folder, saved elsewhere (written relative to the saved file), loaded again."""
+    project, elsewhere = tmp_path / "project", tmp_path / "elsewhere"
+    project.mkdir(), elsewhere.mkdir()
+    urdf = load_robot("panda").urdf
+    shutil.copy(urdf, project / "arm.urdf")  # meshes: package://example-robot-data/robots/... under deps
+    os.symlink(os.path.realpath(os.path.join(os.path.dirname(urdf), "..", "..", "..", "..")), project / "deps")
+    graph_file = project / "arm.yaml"
+    graph_file.write_text(urdf_reach("arm.urdf", ", package_dirs: [deps]"))
+    checked = subprocess.run([sys.executable, "-m", "dgraph", "check", str(graph_file)], cwd=elsewhere,
+                             capture_output=True, text=True, timeout=120)
+    assert checked.returncode == 0, checked.stdout + checked.stderr
+    graph = dg.load(graph_file)
+    assert graph["device"].model == graph["robot"].model == str(project / "arm.urdf")
+    assert graph["device"].package_dirs == [str(project / "deps")] and graph["device"].na == 9
+    saved = elsewhere / "copy.yaml"
+    dg.save(graph, saved)
+    written = saved.read_text()
+    assert "robot: ../project/arm.urdf" in written and "package_dirs: [../project/deps]" in written
+    again = dg.load(saved)
+    assert again["device"].model == str(project / "arm.urdf") and again["device"].na == 9
+    dg.save(again, project / "copy.yaml")
+    assert (project / "copy.yaml").read_text() == written.replace("../project/", "")

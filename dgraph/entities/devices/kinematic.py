@@ -31,14 +31,15 @@ class KinematicDevice(dg.Device):
     control_mode = dg.Param("velocity", kind="str", choices=("velocity", "acceleration"),
                          doc="what the control input commands")
     size = dg.Param(None, kind="int", minimum=1, maximum=MAX_SIZE, doc="state size for a vector state (no model)")
-    model = dg.Param(None, kind="object", doc="example-robot-data robot name or pinocchio.Model")
+    model = dg.Param(None, kind="name_or_path", doc="example-robot-data robot name, URDF path or pinocchio.Model")
     q0 = dg.Param(None, kind="vector", doc="initial configuration (default: neutral / zeros)")
     v0 = dg.Param(None, kind="vector", doc="initial velocity (default: zeros)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
             self, name: str, *, control_mode: Literal["velocity", "acceleration"] = "velocity", size: int | None = None,
-            model: Any = None, q0: ArrayLike | None = None, v0: ArrayLike | None = None, dt: float | None = None,
+            model: str | Any | None = None, q0: ArrayLike | None = None, v0: ArrayLike | None = None,
+            dt: float | None = None,
         ) -> None: ...
 
     control = dg.Input(shape=("nv",), doc="commanded velocity or acceleration")

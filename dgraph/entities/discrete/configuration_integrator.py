@@ -57,15 +57,16 @@ class ConfigurationIntegrator(dg.Entity):
 
     has_state = True
 
-    model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model")
+    model = dg.Param("talos", kind="name_or_path", doc="robot name, URDF path or pinocchio.Model")
     control_mode = dg.Param("velocity", kind="str", choices=("velocity", "acceleration"),
                             doc="velocity: integrate once (IK); acceleration: twice (TSID position)")
     sync_period = dg.Param(0, kind="int", minimum=0, doc="re-synchronise every N ticks (0: only at tick 0)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: Any = "talos", control_mode: Literal["velocity", "acceleration"] = "velocity",
-            sync_period: int = 0, dt: float | None = None,
+            self, name: str, *, model: str | Any = "talos",
+            control_mode: Literal["velocity", "acceleration"] = "velocity", sync_period: int = 0,
+            dt: float | None = None,
         ) -> None: ...
 
     command = dg.Input(shape=("nv",), doc="the QP's velocity or acceleration")

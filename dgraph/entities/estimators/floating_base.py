@@ -142,7 +142,7 @@ class FloatingBaseEstimator(dg.Entity):
 
     has_state = True
 
-    model = dg.Param("talos", kind="object", doc="example-robot-data robot name or pinocchio.Model")
+    model = dg.Param("talos", kind="name_or_path", doc="example-robot-data robot name, URDF path or pinocchio.Model")
     foot_frames = dg.Param(["left_sole_link", "right_sole_link"], kind="str_list",
                            doc="left and right foot frames whose origin is anchored while in contact")
     ft_frames = dg.Param(["leg_left_6_joint", "leg_right_6_joint"], kind="str_list",
@@ -173,7 +173,7 @@ class FloatingBaseEstimator(dg.Entity):
     torque_range = dg.Param(1000.0, kind="float", minimum=0.0, doc="F/T torque range (N m)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: Any = "talos",
+            self, name: str, *, model: str | Any = "talos",
             foot_frames: Sequence[str] = ("left_sole_link", "right_sole_link"),
             ft_frames: Sequence[str] = ("leg_left_6_joint", "leg_right_6_joint"), imu_frame: str | None = None,
             contact_force_on: float = 100.0, contact_force_off: float = 50.0, cutoff_frequency: float = 1.0,

@@ -31,12 +31,12 @@ class JointPosture(Feature):
     ``reference_acceleration`` (n, default 0).
     """
 
-    model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the ports)")
+    model = dg.Param("talos", kind="name_or_path", doc="robot name, URDF path or pinocchio.Model (sizes the ports)")
     joints = dg.Param((), kind="str_list", doc="joint names (default: every 1-dof joint)")
     reference_configuration = dg.Param("half_sitting", kind="str", doc="named configuration used as default")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: Any = "talos", joints: Sequence[str] = (),
+            self, name: str, *, model: str | Any = "talos", joints: Sequence[str] = (),
             reference_configuration: str = "half_sitting",
         ) -> None: ...
 

@@ -70,7 +70,7 @@ class HierarchicalInverseDynamics(StackCommands, TorqueSolver):
     constraint_tolerance = dg.Param(1e-6, kind="float", minimum=0.0, doc="largest residual of the fixed level")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: Any = "talos", tasks: Sequence[str] = (), contacts: Sequence[str] = (),
+            self, name: str, *, model: str | Any = "talos", tasks: Sequence[str] = (), contacts: Sequence[str] = (),
             max_iterations: int = 1000, acceleration_weight: float = 1e-06, fallback_damping: float = 1.0,
             priorities: Sequence[int] = (), eps_abs: float = 1e-08, rank_tolerance: float = 1e-09,
             closed_form: bool = True, constraint_tolerance: float = 1e-06,

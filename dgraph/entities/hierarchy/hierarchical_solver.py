@@ -52,7 +52,7 @@ class HierarchicalSolver(StackCommands, SolverReport, dg.Entity):
     ``iterations``, ``qp_levels`` (levels that needed ProxQP), ``solve_time`` (s).
     """
 
-    model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes v)")
+    model = dg.Param("talos", kind="name_or_path", doc="robot name, URDF path or pinocchio.Model (sizes v)")
     tasks = dg.Param((), kind="str_list", doc="task input names")
     priorities = dg.Param((), kind="int_list", doc="priority of each task (0 highest); default: in order")
     eps_abs = dg.Param(1e-8, kind="float", minimum=1e-12, maximum=1e-3, doc="ProxQP absolute tolerance (then polished)")
@@ -61,7 +61,7 @@ class HierarchicalSolver(StackCommands, SolverReport, dg.Entity):
     closed_form = dg.Param(True, kind="bool", doc="solve a level in closed form when no inequality binds")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: Any = "talos", tasks: Sequence[str] = (), priorities: Sequence[int] = (),
+            self, name: str, *, model: str | Any = "talos", tasks: Sequence[str] = (), priorities: Sequence[int] = (),
             eps_abs: float = 1e-08, max_iterations: int = 1000, rank_tolerance: float = 1e-09, closed_form: bool = True,
         ) -> None: ...
 

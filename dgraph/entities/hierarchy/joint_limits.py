@@ -35,12 +35,12 @@ class JointLimits(Activatable, dg.Entity):
     Outputs: ``rows`` (:class:`~dgraph.control.rows.RowBlock`, inequalities over ``v``).
     """
 
-    model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the rows)")
+    model = dg.Param("talos", kind="name_or_path", doc="robot name, URDF path or pinocchio.Model (sizes the rows)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="integration period in s (default: the graph's dt)")
     velocity_scale = dg.Param(1.0, kind="float", minimum=0.0, doc="fraction of the velocity limits allowed")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: Any = "talos", dt: float | None = None, velocity_scale: float = 1.0,
+            self, name: str, *, model: str | Any = "talos", dt: float | None = None, velocity_scale: float = 1.0,
         ) -> None: ...
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")

@@ -94,12 +94,12 @@ class RobotModel(dg.Entity):
     model is then this entity's own copy).
     """
 
-    model = dg.Param("talos", kind="object", doc="example-robot-data robot name, URDF path or pinocchio.Model")
+    model = dg.Param("talos", kind="name_or_path", doc="example-robot-data robot name, URDF path or pinocchio.Model")
     frames = dg.Param((), kind="str_list", doc="frames whose placement, velocity, Jacobian and drift are outputs")
     tool_frames = dg.Param(None, kind="object", doc="extra frames: {name: {parent: frame, translation: [x, y, z]}}")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: Any = "talos", frames: Sequence[str] = (), tool_frames: Any = None,
+            self, name: str, *, model: str | Any = "talos", frames: Sequence[str] = (), tool_frames: Any = None,
         ) -> None: ...
 
     q = dg.Input(shape=("nq",), doc="configuration (Pinocchio convention)")

@@ -59,7 +59,7 @@ class InverseDynamicsSolver(TorqueSolver):
     passive = dg.Param(False, kind="bool", doc="declare a passivity input (an energy tank's, Eq. 5.34)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: Any = "talos", tasks: Sequence[str] = (), contacts: Sequence[str] = (),
+            self, name: str, *, model: str | Any = "talos", tasks: Sequence[str] = (), contacts: Sequence[str] = (),
             max_iterations: int = 1000, acceleration_weight: float = 1e-06, fallback_damping: float = 1.0,
             eps_abs: float = 1e-06, passive: bool = False,
         ) -> None: ...

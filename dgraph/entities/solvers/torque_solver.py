@@ -50,7 +50,7 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
 
     reserved_inputs: tuple[str, ...] = ()
 
-    model = dg.Param("talos", kind="object", doc="robot name or pinocchio.Model (sizes the ports)")
+    model = dg.Param("talos", kind="name_or_path", doc="robot name, URDF path or pinocchio.Model (sizes the ports)")
     tasks = dg.Param((), kind="str_list", doc="task input names")
     contacts = dg.Param((), kind="str_list", doc="contact input names")
     max_iterations = dg.Param(1000, kind="int", minimum=1, doc="ProxQP iteration limit")
