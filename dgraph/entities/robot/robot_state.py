@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from dgraph.entities.robot.loading import has_free_flyer, load_robot  # noqa: F401  (load_robot: robot_view.py's import)
+from dgraph.entities.robot.loading import has_free_flyer
 from dgraph.errors import DGraphError, ParamError
 from dgraph.signals.value_types import value_type
 
