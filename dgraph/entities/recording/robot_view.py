@@ -101,7 +101,7 @@ class RobotView(dg.Entity):
     """
 
     observes = True
-    model = dg.Param("talos", kind="str", doc="example-robot-data robot name")
+    model = dg.Param("talos", kind="name_or_path", doc="example-robot-data robot name or URDF path")
     decimation = dg.Param(20, kind="int", minimum=1, doc="log the poses one tick in N (20: 50 Hz at 1 kHz)")
     path = dg.Param("world/robot", kind="str", doc="Rerun entity path of the robot")
     floor = dg.Param(True, kind="bool", doc="also log a floor square and world axes")
@@ -112,7 +112,7 @@ class RobotView(dg.Entity):
                            doc="ticks buffered before a Rerun send (default: 1000 to a file, 200 to a viewer)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: str = "talos", decimation: int = 20, path: str = "world/robot",
+            self, name: str, *, model: str | Any = "talos", decimation: int = 20, path: str = "world/robot",
             floor: bool = True, rerun: Literal["off", "save", "spawn", "serve"] | None = None,
             rrd_path: str | None = None, flush_every: int | None = None,
         ) -> None: ...
