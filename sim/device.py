@@ -44,7 +44,7 @@ from dgraph_sim.model import SimModel, load
 from dgraph_sim.robots import MJCF_TOLERANCE, MjcfError, RobotInfo
 from dgraph_sim.scenes import SCENES
 from dgraph_sim.video import VideoError, VideoWriter, check_video, log_video
-from dgraph_sim.viewer import PassiveViewer, ViewerError
+from dgraph_sim.viewer import PassiveViewer, ViewerError, check_display
 
 _STATE = int(mujoco.mjtState.mjSTATE_INTEGRATION) & ~int(mujoco.mjtState.mjSTATE_QFRC_APPLIED
                                                           | mujoco.mjtState.mjSTATE_XFRC_APPLIED)
@@ -128,9 +128,11 @@ class MujocoDevice(dg.Device):
     refused naming ``mjcf`` and the joint (:func:`dgraph_sim.robots.mjcf_spec`,
     :func:`dgraph_sim.robots.compare_dynamics`).
 
-    ``viewer: true`` opens an interactive MuJoCo window (``mujoco.viewer.launch_passive``) synced
-    at ``viewer_fps`` and paced to the wall clock (:mod:`dgraph_sim.viewer`); it needs a display
-    (``DISPLAY`` or ``WAYLAND_DISPLAY``), else the device is refused with a ``ParamError``.
+    ``viewer: true`` opens an interactive MuJoCo window (``mujoco.viewer.launch_passive``) at the
+    first tick run, synced at ``viewer_fps`` and paced to the wall clock (:mod:`dgraph_sim.viewer`);
+    :meth:`close` closes it. It needs a display (``DISPLAY`` or ``WAYLAND_DISPLAY``) that GLFW can
+    open, else the device is refused with a ``ParamError``. The window does not change the
+    simulation, and works with ``video_path`` (``MUJOCO_GL`` is for offscreen rendering only).
     """
 
     model = dg.Param("talos", kind="name_or_path", doc="example-robot-data robot name (talos, panda, ur5...) or "
@@ -334,12 +336,12 @@ class MujocoDevice(dg.Device):
                 raise dg.ParamError(f"{self.name}: video_path: {exc}", entity=self.name) from None
             self._renderer(*self.video_size, purpose="video_path")  # no OpenGL: refused now, not at the first frame
             self.after.add(self._record_frame)
-        if self.viewer:  # last: a window is opened only once every other check has passed
+        if self.viewer:  # the display is checked now; the window opens at the first tick run (_show)
             try:
-                self._viewer = PassiveViewer(m, d, self.dt, self.viewer_fps)
+                check_display()
             except ViewerError as exc:
                 raise dg.ParamError(f"{self.name}: parameter 'viewer': {exc}", entity=self.name) from None
-            self.after.add(self._viewer.sync)
+            self.before.add(self._show)
 
     def _setup_sensors(self) -> None:
         """One gather of ``sensordata`` per tick for the robot's sensors, and the states that are its parts.
@@ -635,6 +637,18 @@ class MujocoDevice(dg.Device):
         except VideoError as exc:
             raise dg.DGraphError(f"{self.name}: video_path: {exc}", entity=self.name) from None
         self._next_frame = t + interval
+
+    def _show(self, t: int) -> None:
+        """Before hook (``viewer: true``): open the window at the first tick run (the graph's dt is
+        known then, and loading, checking or drawing a graph opens none), then show the state at
+        ``t``. A before hook: ``launch_passive`` runs ``mj_forward`` on the data, which at tick 0
+        repeats :meth:`reset`'s ``mj_forward`` at the same state."""
+        if self._viewer is None:
+            try:
+                self._viewer = PassiveViewer(self.mj_model, self.data, self.dt, self.viewer_fps)
+            except ViewerError as exc:
+                raise dg.DGraphError(f"{self.name}: parameter 'viewer': {exc}", entity=self.name) from None
+        self._viewer.sync(t)
 
     def write_video(self) -> str | None:
         """Finish the video file ``video_path`` (its format by its extension: ``.mp4``, ``.gif``,
