@@ -19,6 +19,7 @@ motor side's, the joint side's friction, ``R K_m`` and ``K_j``.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -85,3 +86,94 @@ TALOS_ELBOW = ChainParameters(M_X=-0.11, M_Y=1.1, I_j=0.33, I_m=0.45, F_vm=5.1, 
 """TALOS's elbow, thesis Table 3.1 (identified column), ``K_j`` = 1.015 and the 6 A a-priori
 current limit (§3.5.3). ``R K_m`` is not disclosed (the identified value differs from the
 manufacturer's by 16 %): it stays 1 here and is set where it is known."""
+
+
+TALOS_ELBOW_R_KM = 17.86 / 6.0
+"""``R K_m`` of TALOS's elbow used by ``graphs/data/talos_actuators.yaml`` (N m/A), a gap-filler:
+the thesis does not disclose it. The URDF's effort limit of ``arm_*_4_joint`` (17.86 N m) taken
+as the torque at the thesis's 6 A current limit: 2.977 N m/A. Cross-check with the thesis's
+simulated 30 kg case (§3.5.3: with the barrier the current plateaus at about 5.6 A, without it
+the 6 A limit is exceeded): holding 30 kg at 5 cm (14.7 N m) with the forearm near the lower
+limit -2.35 rad (``g (M_Y sin q + M_X cos q)`` = -6.9 N m, same side) needs about 21.6 N m
+statically, 7.3 A at 2.977 N m/A: more than 6 A, as the thesis observes. That observation bounds
+``R K_m`` from above (21.6 N m / 6 A = 3.6 N m/A, more if the motion's friction is counted); it
+does not fix it."""
+
+MAX_CHAIN_FILE_BYTES = 1 << 20
+"""Largest actuator parameter file read (bytes)."""
+
+
+class ChainFileError(ValueError):
+    """An actuator parameter file that cannot be used; the message names the file and the joint or line."""
+
+
+def load_chain_file(path: str | os.PathLike[str]) -> dict[str, ChainParameters]:
+    """The chains of an actuator parameter file (YAML, read with the safe loader), by joint name.
+
+    The file::
+
+        joints:
+          arm_left_4_joint: {I_m: 0.45, F_vm: 5.1, ..., R_Km: 2.977, K_j: 1.015, i_max: 6.0}
+
+    Every key of a joint is a :class:`ChainParameters` field (a finite number; ``i_max``
+    positive, may be ``.inf``; ``R_Km`` and ``K_j`` positive; ``I_m``, the viscous and dry
+    frictions non-negative); ``R_Km`` and ``i_max`` are required (their defaults mean nothing
+    for a real chain), the others default to the dataclass's. Other top-level keys than
+    ``joints`` (``source``, ``notes``...) are allowed and ignored. A bad file raises
+    :class:`ChainFileError` naming the file and the joint and key, or the line of a YAML error.
+    """
+    import yaml
+
+    path = os.fspath(path)
+    try:
+        size = os.stat(path).st_size
+        if size > MAX_CHAIN_FILE_BYTES:
+            raise ChainFileError(f"{path}: {size} bytes, more than the {MAX_CHAIN_FILE_BYTES} allowed")
+        with open(path, encoding="utf-8") as f:
+            document = yaml.safe_load(f)
+    except OSError as exc:
+        raise ChainFileError(f"cannot read actuator file {path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ChainFileError(f"{path}: not UTF-8 text ({exc.reason})") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f", line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise ChainFileError(f"{path}{where}: not valid YAML: {problem}") from None
+    if not isinstance(document, dict) or not isinstance(document.get("joints"), dict) or not document["joints"]:
+        raise ChainFileError(f"{path}: expected a mapping with a non-empty 'joints' mapping (joint name -> parameters)")
+    names = set(ChainParameters.names())
+    chains = {}
+    for joint, values in document["joints"].items():
+        where = f"{path}: joint {joint!r}"
+        if not isinstance(joint, str) or not isinstance(values, dict):
+            raise ChainFileError(f"{where}: expected a joint name mapped to its parameters")
+        unknown = sorted(str(k) for k in values if k not in names)
+        if unknown:
+            raise ChainFileError(f"{where}: unknown parameter(s) {unknown}; known: {sorted(names)}")
+        missing = [k for k in ("R_Km", "i_max") if k not in values]
+        if missing:
+            raise ChainFileError(f"{where}: missing {missing} (no default is meaningful for a real chain)")
+        checked = {}
+        for key, value in values.items():
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ChainFileError(f"{where}: {key} must be a number, got {value!r}")
+            value = float(value)
+            if np.isnan(value) or (np.isinf(value) and key != "i_max"):
+                raise ChainFileError(f"{where}: {key} must be finite, got {value!r}")
+            if key in ("R_Km", "K_j", "i_max") and not value > 0.0:
+                raise ChainFileError(f"{where}: {key} must be positive, got {value!r}")
+            if key in ("I_m", "I_j", "F_vm", "F_sm", "F_vj", "F_sj") and value < 0.0:
+                raise ChainFileError(f"{where}: {key} must not be negative, got {value!r}")
+            checked[key] = value
+        chains[joint] = ChainParameters(**checked)
+    return chains
+
+
+def mujoco_joint(chain: ChainParameters) -> dict[str, float]:
+    """What a MuJoCo joint driven by ``chain`` gets: ``armature`` = I_m (the link's inertia stays
+    the rigid body's), ``damping`` = F_v = F_vm + F_vj, ``frictionloss`` = F_s = F_sm + F_sj,
+    ``force_limit`` = R K_m i_max (the actuator's force range ±, and its ``ctrlrange``). The
+    offsets ``off_m``, ``off_j`` have no MuJoCo counterpart and are left out."""
+    return {"armature": chain.I_m, "damping": chain.F_v, "frictionloss": chain.F_s,
+            "force_limit": chain.R_Km * chain.i_max}
