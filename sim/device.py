@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 import dgraph as dg
+from dgraph.entities.actuators.chain import ChainFileError
 from dgraph.entities.robot.loading import check_source
 from dgraph_sim.camera import RobotCamera
 from dgraph_sim.disturbances import Removals
@@ -128,6 +129,14 @@ class MujocoDevice(dg.Device):
     refused naming ``mjcf`` and the joint (:func:`dgraph_sim.robots.mjcf_spec`,
     :func:`dgraph_sim.robots.compare_dynamics`).
 
+    ``actuators``: an actuator parameter file (e.g. ``graphs/data/talos_actuators.yaml``,
+    :func:`dgraph.entities.actuators.chain.load_chain_file`): each joint it names gets its
+    chain's dynamics (:func:`dgraph_sim.robots.apply_chains`): armature ``I_m``, viscous damping
+    ``F_vm + F_vj``, dry friction loss ``F_sm + F_sj`` and torques clipped at ``±R K_m i_max``
+    (``joint_torque`` reports the clipped torque), so the simulated joint behaves like
+    :class:`~dgraph.entities.actuators.ActuatorModel`'s chain. Pinocchio's model is not changed:
+    a controller built on it does not know the chain, which the actuator model compensates.
+
     ``viewer: true`` opens an interactive MuJoCo window (``mujoco.viewer.launch_passive``) at the
     first tick run, synced at ``viewer_fps`` and paced to the wall clock (:mod:`dgraph_sim.viewer`);
     :meth:`close` closes it. It needs a display (``DISPLAY`` or ``WAYLAND_DISPLAY``) that GLFW can
@@ -143,6 +152,9 @@ class MujocoDevice(dg.Device):
                     "joints matched by name, masses checked (in a graph file, relative to its folder)")
     mjcf_tolerance = dg.Param(MJCF_TOLERANCE, kind="float", minimum=0.0, doc="relative tolerance of the check "
                               "that the MJCF and the Pinocchio model have the same masses and inertias")
+    actuators = dg.Param(None, kind="path", doc="actuator parameter file (YAML): its joints get the chain's armature "
+                         "I_m, damping F_v, friction loss F_s, force range R K_m i_max (in a graph file, relative "
+                         "to its folder)")
     scene = dg.Param("flat", kind="str", choices=tuple(SCENES), doc="scene (dgraph_sim.scenes)")
     collisions = dg.Param("all", kind="str", choices=("feet", "all"),
                           doc="robot geoms touching the scene: every collision mesh (never each other), or soles only")
@@ -174,7 +186,8 @@ class MujocoDevice(dg.Device):
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
             self, name: str, *, model: str | Any = "talos", package_dirs: Sequence[str] = (), mjcf: str | None = None,
-            mjcf_tolerance: float = 0.01, scene: Literal["flat", "block", "stairs", "slope", "push"] = "flat",
+            mjcf_tolerance: float = 0.01, actuators: str | None = None,
+            scene: Literal["flat", "block", "stairs", "slope", "push"] = "flat",
             collisions: Literal["feet", "all"] = "all", control_mode: Literal["torque", "position"] = "torque",
             kp: ArrayLike | None = None, kd: ArrayLike | None = None, q0: ArrayLike | None = None,
             v0: ArrayLike | None = None, dt: float | None = None, wrench_bodies: Sequence[str] = (),
@@ -209,7 +222,9 @@ class MujocoDevice(dg.Device):
                                 "from its URDF; with mjcf the MJCF's contacts are used as written", entity=self.name)
         try:
             self.sim: SimModel = load(self.model, self.scene, 0.001, self.collisions, tuple(self.package_dirs),
-                                      self.mjcf, self.mjcf_tolerance)
+                                      self.mjcf, self.mjcf_tolerance, self.actuators)
+        except ChainFileError as exc:  # before ValueError, which it is
+            raise dg.ParamError(f"{self.name}: parameter 'actuators': {exc}", entity=self.name) from None
         except MjcfError as exc:  # the MJCF does not describe the robot of the Pinocchio model
             raise dg.ParamError(f"{self.name}: parameter 'mjcf': {exc}", entity=self.name) from None
         except ValueError as exc:  # a mesh not found, a joint MuJoCo cannot mirror

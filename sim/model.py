@@ -16,7 +16,14 @@ import numpy as np
 
 from dgraph.entities.robot.loading import file_stamp, is_urdf_path
 from dgraph_sim.conventions import JointMap
-from dgraph_sim.robots import MJCF_TOLERANCE, MjcfError, RobotInfo, compare_dynamics, robot_spec
+from dgraph_sim.robots import (
+    MJCF_TOLERANCE,
+    MjcfError,
+    RobotInfo,
+    apply_chains,
+    compare_dynamics,
+    robot_spec,
+)
 from dgraph_sim.scenes import add_scene
 
 
@@ -55,7 +62,7 @@ def _sensor_adr(m: mujoco.MjModel, name: str) -> int:
 
 def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collisions: str = "all",
          package_dirs: tuple[str, ...] = (), mjcf: str | None = None,
-         mjcf_tolerance: float = MJCF_TOLERANCE) -> SimModel:
+         mjcf_tolerance: float = MJCF_TOLERANCE, actuators: str | None = None) -> SimModel:
     """Build (once per process and arguments) the MuJoCo model of ``robot`` (an example-robot-data
     name or a URDF path, :func:`dgraph_sim.robots.robot_spec`) in ``scene``.
 
@@ -64,7 +71,13 @@ def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collision
     :func:`dgraph_sim.robots.compare_dynamics` with ``mjcf_tolerance``; a mismatch raises
     :class:`~dgraph_sim.robots.MjcfError`. The cache knows the MJCF file, and a URDF file given
     as ``robot``, by its real path, size and modification time, so an edited file is read again
-    (``package_dirs``: by their absolute paths)."""
+    (``package_dirs``: by their absolute paths).
+
+    ``actuators``: an actuator parameter file
+    (:func:`dgraph.entities.actuators.chain.load_chain_file`) whose joints get their chain's
+    armature, damping, friction loss and force range (:func:`dgraph_sim.robots.apply_chains`);
+    a bad file or an unknown joint raises :class:`~dgraph.entities.actuators.chain.ChainFileError`.
+    The cache knows it by its real path, size and modification time too."""
     urdf_stamp = None
     if is_urdf_path(robot) and os.path.isfile(robot):  # else robot_spec refuses it
         robot = os.path.realpath(robot)
@@ -77,15 +90,21 @@ def load(robot: str = "talos", scene: str = "flat", dt: float = 0.001, collision
         except OSError as exc:
             raise MjcfError(f"cannot read {mjcf}: {exc.strerror}") from None
         stamp = (status.st_size, status.st_mtime_ns)
+    actuators_stamp = None
+    if actuators is not None:
+        actuators = os.path.realpath(actuators)
+        actuators_stamp = file_stamp(actuators) if os.path.isfile(actuators) else None
     package_dirs = tuple(os.path.abspath(folder) for folder in package_dirs)
-    return _load(robot, scene, dt, collisions, package_dirs, mjcf, stamp, float(mjcf_tolerance), urdf_stamp)
+    return _load(robot, scene, dt, collisions, package_dirs, mjcf, stamp, float(mjcf_tolerance), urdf_stamp,
+                 actuators, actuators_stamp)
 
 
 @lru_cache(maxsize=16)
 def _load(robot: str, scene: str, dt: float, collisions: str, package_dirs: tuple[str, ...], mjcf: str | None,
-          stamp: tuple[int, int] | None, mjcf_tolerance: float, urdf_stamp: tuple[int, int] | None) -> SimModel:
-    """:func:`load`, cached (``stamp`` and ``urdf_stamp``: the size and modification time of the
-    MJCF and of a URDF ``robot``, keys only)."""
+          stamp: tuple[int, int] | None, mjcf_tolerance: float, urdf_stamp: tuple[int, int] | None,
+          actuators: str | None = None, actuators_stamp: tuple[int, int] | None = None) -> SimModel:
+    """:func:`load`, cached (``stamp``, ``urdf_stamp`` and ``actuators_stamp``: the size and
+    modification time of the MJCF, of a URDF ``robot`` and of the actuator file, keys only)."""
     if not (dt > 0.0 and np.isfinite(dt)):
         raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
     spec, info = robot_spec(robot, dt, collisions, tuple(package_dirs), mjcf)
@@ -121,4 +140,11 @@ def _load(robot: str, scene: str, dt: float, collisions: str, package_dirs: tupl
         raise MjcfError(f"{mjcf}: {exc}") from None
     if mjcf is not None:
         compare_dynamics(m, joint_map, info.pin_model, info.q0, mjcf_tolerance, mjcf)
+    if actuators is not None:
+        from dgraph.entities.actuators.chain import ChainFileError, load_chain_file
+
+        try:
+            apply_chains(m, load_chain_file(actuators), actuators)
+        except ValueError as exc:
+            raise ChainFileError(str(exc)) from None
     return SimModel(m, info.pin_model, joint_map, info, sensors, bodies)

@@ -659,3 +659,35 @@ def compare_dynamics(mj_model: mujoco.MjModel, joint_map: Any, pin_model: Any, q
                                                                          for key, error, text, _ in bad),
                         joint=bad[0][3])
     return {key: value[0] for key, value in worst.items()}
+
+
+def apply_chains(m: mujoco.MjModel, chains: dict[str, Any], source: str = "actuator file") -> None:
+    """Give the named joints of the compiled model ``m`` the dynamics of their actuator chains
+    (:class:`dgraph.entities.actuators.ChainParameters`, :func:`dgraph.entities.actuators.chain.mujoco_joint`):
+    ``armature`` = I_m (replacing the URDF's rotor inertia; the link's inertia stays the rigid
+    body's), ``damping`` = F_vm + F_vj, ``frictionloss`` = F_sm + F_sj, and ``±R K_m i_max`` as
+    the joint's ``actfrcrange`` and its motor's ``ctrlrange`` (MuJoCo clips there, the device
+    too). Applied to the compiled model, after :func:`compare_dynamics` (the Pinocchio model
+    keeps its own armature: the chain is the actuator model's to compensate). A joint missing
+    from ``m`` or without a motor raises ``ValueError`` naming ``source``."""
+    from dgraph.entities.actuators.chain import mujoco_joint
+
+    joint_trn = int(mujoco.mjtTrn.mjTRN_JOINT)
+    motors = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu) if int(m.actuator_trntype[a]) == joint_trn}
+    for name, chain in chains.items():
+        jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
+        if jid < 0 or jid not in motors or int(m.jnt_type[jid]) not in (int(mujoco.mjtJoint.mjJNT_HINGE),
+                                                                        int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            raise ValueError(f"{source}: joint {name!r} is not an actuated one-dof joint of the robot")
+        dof, motor = int(m.jnt_dofadr[jid]), motors[jid]
+        values = mujoco_joint(chain)
+        m.dof_armature[dof] = values["armature"]
+        m.dof_damping[dof] = values["damping"]
+        m.dof_frictionloss[dof] = values["frictionloss"]
+        limit = values["force_limit"]
+        if np.isfinite(limit):
+            m.jnt_actfrcrange[jid] = [-limit, limit]
+            m.jnt_actfrclimited[jid] = 1
+            m.actuator_ctrlrange[motor] = [-limit, limit]
+            m.actuator_ctrllimited[motor] = 1
+    mujoco.mj_setConst(m, mujoco.MjData(m))  # the constants derived from the inertia (dof_invweight0...)
