@@ -76,7 +76,7 @@ def test_holding_20_kg_at_5_cm_is_thermally_harmless():
     """30° of elbow flexion: 9.81 N m of load + 6.3 N m of forearm - off_m 0.86 N m, 5.13 A,
     under the 6 A limit; an hour at that current from 43 °C ends at 69.0 °C (steady 69.2 °C),
     under T_max = 100 °C, with the gap-filler thermal parameters (R_TA 0.6 Ohm, R_th 1.5 K/W,
-    C_th 400 J/K). Past about 45° of flexion the chain cannot hold 20 kg at 5 cm (more than 6 A
+    C_th 400 J/K). Past about 50° of flexion the chain cannot hold 20 kg at 5 cm (more than 6 A
     with R K_m = 2.98 N m/A; the forearm horizontal needs 6.6 A); at the 6 A limit itself an hour
     ends at 79.9 °C, so every load the chain can hold is harmless, with these parameters."""
     current, saturated = holding_current(-np.pi / 6)
