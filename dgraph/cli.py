@@ -8,6 +8,9 @@
     dgraph profile FILE [--duration S | --ticks N] [--set entity.name=value ...]
     dgraph show FILE --format dot|mermaid [--signals] [-o OUT]
     dgraph entities [TYPE]
+    dgraph identify RECORDING [--payload-recording P --payload-mass KG --payload-arm M | --drive-gain NM_PER_A]
+                    [--time C] [--position C] [--velocity C] [--current C] [--torque C] [--joint J]
+                    [--cutoff HZ] [--order N] [--decimation N] [--min-velocity RAD_S] [--yaml OUT]
     dgraph --version
 
 ``python -m dgraph ...`` is the same command. The Rerun sink options are those of Rerun's own
@@ -306,6 +309,69 @@ def cmd_entities(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_identify(args: argparse.Namespace) -> int:
+    """Identify an actuator chain's parameters from recordings (thesis Eqs. 3.9-3.12) and print
+    Table 3.1's columns; optionally write them as YAML."""
+    from dgraph.entities.actuators.identification import Payload, RecordingError, identify_recordings
+
+    payload_args = (args.payload_recording, args.payload_mass, args.payload_arm)
+    if any(a is not None for a in payload_args) and not all(a is not None for a in payload_args):
+        raise RecordingError("--payload-recording, --payload-mass and --payload-arm go together")
+    if args.payload_recording and args.drive_gain is not None:
+        raise RecordingError("the scale comes from the payload or from --drive-gain, not both")
+    payload = Payload(args.payload_mass, args.payload_arm) if args.payload_recording else None
+    columns = {"time": args.time, "position": args.position, "current": args.current, "torque": args.torque,
+               "velocity": args.velocity}
+    options = {"cutoff": args.cutoff, "order": args.order, "decimation": args.decimation,
+               "min_velocity": args.min_velocity}
+    result = identify_recordings(args.recording, args.payload_recording, payload, columns=columns,
+                                 joint=args.joint, drive_gain=args.drive_gain, **options)
+    print(f"{args.recording}" + (f" + {args.payload_recording} ({args.payload_mass:g} kg at {args.payload_arm:g} m)"
+                                 if payload else ""))
+    print(result.table())
+    if args.yaml:
+        import yaml
+
+        Path(args.yaml).write_text(yaml.safe_dump(result.yaml_mapping(), sort_keys=False))
+        print(f"wrote {args.yaml}")
+    return 0
+
+
+def _add_identify(sub: argparse._SubParsersAction) -> None:
+    """The ``identify`` subcommand's options."""
+    ident = sub.add_parser("identify", help="identify an actuator chain's parameters from .npz recordings "
+                                            "(total least squares, thesis Eqs. 3.9-3.12, Table 3.1)")
+    ident.add_argument("recording", help="the .npz recording without payload (double S-curve motions)")
+    scale = ident.add_argument_group("scale (the payload experiment, or a known R K_m)")
+    scale.add_argument("--payload-recording", metavar="PATH", help="the .npz recording of the same motions "
+                                                                   "with the payload")
+    scale.add_argument("--payload-mass", type=float, metavar="KG", help="the payload's mass (kg)")
+    scale.add_argument("--payload-arm", type=float, metavar="M",
+                       help="distance of the payload's centre of mass from the joint axis along the link's Y (m)")
+    scale.add_argument("--drive-gain", type=float, metavar="NM_PER_A",
+                       help="a known R K_m (N m/A) instead of a payload experiment")
+    cols = ident.add_argument_group("columns of the recordings (a 2-D column gives its --joint component)")
+    cols.add_argument("--time", default="time", metavar="COLUMN", help="time (s) (default: time)")
+    cols.add_argument("--position", default="position", metavar="COLUMN",
+                      help="joint position (rad) (default: position)")
+    cols.add_argument("--velocity", metavar="COLUMN",
+                      help="joint velocity (rad/s) (default: centred differences of the position)")
+    cols.add_argument("--current", default="current", metavar="COLUMN", help="motor current (A) (default: current)")
+    cols.add_argument("--torque", default="torque", metavar="COLUMN",
+                      help="joint torque sensor reading (N m) (default: torque)")
+    cols.add_argument("--joint", type=int, default=0, metavar="J", help="component of 2-D columns (default 0)")
+    proc = ident.add_argument_group("processing")
+    proc.add_argument("--cutoff", type=float, default=5.0, metavar="HZ",
+                      help="zero-phase Butterworth low-pass cutoff (default 5 Hz, as the thesis)")
+    proc.add_argument("--order", type=int, default=5, metavar="N", help="Butterworth order (default 5)")
+    proc.add_argument("--decimation", type=int, metavar="N",
+                      help="keep one sample in N after filtering (default: 4 samples per cutoff period)")
+    proc.add_argument("--min-velocity", type=float, default=0.05, metavar="RAD_S",
+                      help="leave out samples slower than this, where sign(q_dot) is undefined (default 0.05)")
+    ident.add_argument("--yaml", metavar="OUT", help="also write the identified parameters to this YAML file")
+    ident.set_defaults(func=cmd_identify)
+
+
 def _port(text: str) -> int:
     """A TCP port number, for argparse."""
     try:
@@ -386,6 +452,7 @@ def build_parser() -> argparse.ArgumentParser:
     ents = sub.add_parser("entities", help="list the registered entity types")
     ents.add_argument("type", nargs="?", help="describe one type")
     ents.set_defaults(func=cmd_entities)
+    _add_identify(sub)
     return parser
 
 

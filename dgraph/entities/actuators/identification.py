@@ -206,9 +206,10 @@ class Identification:
         return "\n".join(lines)
 
     def yaml_mapping(self) -> dict[str, float]:
-        """The chain's parameters as a plain mapping (:meth:`ChainParameters.names`), for an actuator file."""
+        """The identified parameters (:data:`PHI_NAMES`, ``R_Km``, ``K_j``; :class:`ChainParameters`
+        names) as a plain mapping, for an actuator file; ``i_max`` is not identified and left out."""
         return {name: float(getattr(self.parameters, name)) for name in ChainParameters.names()
-                if np.isfinite(getattr(self.parameters, name))}
+                if name in (*PHI_NAMES, "R_Km", "K_j")}
 
 
 def total_regressor(experiments: Sequence[Samples]) -> np.ndarray:
