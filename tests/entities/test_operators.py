@@ -1,4 +1,4 @@
-"""Glue operators: Constant, Add, Gain, Selector, Switch, Saturation."""
+"""Glue operators: Constant, Add, Gain, Selector, Replace, Switch, Saturation."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import dgraph as dg
-from dgraph.entities.operators import Add, Constant, Gain, Saturation, Selector, Switch
+from dgraph.entities.operators import Add, Constant, Gain, Replace, Saturation, Selector, Switch
 
 
 def test_constant_scalar_vector_matrix(graph):
@@ -52,6 +52,21 @@ def test_selector(graph):
     assert np.array_equal(s.output(0), [13, 10]) and s.output.spec.shape == (2,)
     with pytest.raises(dg.ParamError, match="invalid for size 4"):
         Selector("bad", size=4, indices=[4])
+
+
+def test_replace_overwrites_the_indexed_components_of_a_copy(graph):
+    r = graph.add(Replace("r", size=4, indices=[2, -4]))
+    source = np.array([10.0, 11.0, 12.0, 13.0])
+    r.input.set(source)
+    r.values.set([-1.0, -2.0])
+    assert np.array_equal(r.output(0), [-2.0, 11.0, -1.0, 13.0]) and r.output.spec.shape == (4,)
+    assert np.array_equal(source, [10.0, 11.0, 12.0, 13.0])  # the input is left as it was
+    with pytest.raises(dg.SpecError, match=r"r\.values"):
+        r.values.set([1.0, 2.0, 3.0])
+    with pytest.raises(dg.ParamError, match="invalid for size 4"):
+        Replace("bad", size=4, indices=[4])
+    with pytest.raises(dg.ParamError, match="twice"):
+        Replace("twice", size=4, indices=[1, -3])
 
 
 def test_switch_evaluates_only_the_selected_input(graph):
