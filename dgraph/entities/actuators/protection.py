@@ -299,16 +299,21 @@ def solve(model: Model, lim: Limits, w: Weights, q0: np.ndarray, v0: np.ndarray,
 
 
 def reference(model: Model, chains: Sequence[ChainParameters], torque: np.ndarray, q: np.ndarray,
-              v: np.ndarray, n_knots: int, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              v: np.ndarray, n_knots: int, h: float,
+              acceleration: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``x*`` and ``u*`` from the commanded joint torque: the current that delivers ``tau_j*``
-    (motor side of Eq. 3.1 with the link's acceleration from its joint side), held over the
-    horizon, and the model's trajectory under it."""
+    (motor side of Eq. 3.1 with the link's acceleration from its joint side, or ``acceleration``
+    where the controller gives it, i.e. where it is finite), held over the horizon, and the
+    model's trajectory under it."""
     u_star = np.empty_like(torque)
     for j, c in enumerate(chains):
         grav = GRAVITY * (c.M_Y * np.sin(q[j]) + c.M_X * np.cos(q[j]))
         tau_fj = friction(c.F_vj, c.F_sj, c.off_j, v[j], smoothing=model.mu)
         tau_fm = friction(c.F_vm, c.F_sm, c.off_m, v[j], smoothing=model.mu)
-        q_ddot = (torque[j] - grav - tau_fj) / c.I_j if c.I_j > 0 else 0.0
+        if acceleration is not None and np.isfinite(acceleration[j]):
+            q_ddot = acceleration[j]
+        else:
+            q_ddot = (torque[j] - grav - tau_fj) / c.I_j if c.I_j > 0 else 0.0
         u_star[j] = (torque[j] + c.I_m * q_ddot + tau_fm) / c.R_Km
     u_ref = np.tile(u_star, (n_knots, 1))
     q_ref, v_ref = rollout(model, q, v, u_ref, h)
@@ -365,7 +370,10 @@ class TorqueProtection(dg.Entity):
     weights ``Q_q``, ``Q_qd``, ``R``, ``W_q``, ``W_qd``, ``P`` and ``lam_q``, ``lam_qd``, ``lam_tau``
     (thesis Eq. 3.23 and §3.4.5), ``torque_weight`` (S, ours: the weight of ``(i - i*)^2``),
     ``mu`` (Eq. 3.18), ``max_iterations``, ``tolerance`` (relative cost decrease that stops).
-    Inputs: ``torque`` (commanded joint torque ``tau_j*``, N m), ``q``, ``q_dot`` (measured).
+    Inputs: ``torque`` (commanded joint torque ``tau_j*``, N m), ``q``, ``q_dot`` (measured),
+    ``q_ddot`` (the acceleration the controller commands, e.g. a whole-body QP's: ``i*`` delivers
+    ``tau_j*`` at it; default NaN, per joint: the link model's ``(tau_j* - g(q) - tau_fj) / I_j``,
+    which is wrong when the link carries a load the chain's ``M_X``, ``M_Y`` do not hold).
     Outputs: ``current`` (the filtered ``i_m``, A), ``torque_out`` (the joint torque it delivers,
     ``R K_m i - I_m q_ddot - tau_fm`` with the model's ``q_ddot``), ``reference_current``
     (``i*``, unfiltered), ``predicted_q``, ``predicted_q_dot`` (joints x knots+1, the plan),
@@ -410,6 +418,12 @@ class TorqueProtection(dg.Entity):
     torque = dg.Input(shape=None, doc="commanded joint torque tau_j* (N m)")
     q = dg.Input(shape=None, doc="joint position (rad)")
     q_dot = dg.Input(shape=None, doc="joint velocity (rad/s)")
+    q_ddot = dg.Input(shape=None, default=np.nan, finite=None,
+                      doc="joint acceleration the controller commands (rad/s²), for i*; NaN (default): the link "
+                      "model's")
+
+    def _acceleration(self, t: int) -> np.ndarray:
+        return _vector(self.q_ddot(t), self.size, "q_ddot")
 
     def setup(self) -> None:
         """The model, limits and weights from the parameters."""
@@ -449,7 +463,7 @@ class TorqueProtection(dg.Entity):
         grid = np.arange(old.shape[0]) * self.knot_step
         return np.stack([np.interp(times, grid, old[:, j]) for j in range(self.size)], axis=1)
 
-    @dg.output(shape=None, depends=("torque", "q", "q_dot", "t"), finite=None)
+    @dg.output(shape=None, depends=("torque", "q", "q_dot", "q_ddot", "t"), finite=None)
     def plan(self, t: int) -> Solution:
         """The last solution (re-solved every ``resolve_every`` ticks)."""
         if self._plan is not None and t - self._plan_tick < self.resolve_every:
@@ -457,7 +471,8 @@ class TorqueProtection(dg.Entity):
         n = self.size
         torque = _vector(self.torque(t), n, "torque")
         q, v = _vector(self.q(t), n, "q"), _vector(self.q_dot(t), n, "q_dot")
-        q_ref, v_ref, u_ref = reference(self._model, self._chains, torque, q, v, self._knots, self.knot_step)
+        q_ref, v_ref, u_ref = reference(self._model, self._chains, torque, q, v, self._knots, self.knot_step,
+                                        self._acceleration(t))
         elapsed = (t - self._plan_tick) * self.dt
         start = time.perf_counter()
         sol = solve(self._model, self._limits, self._weights, q, v, q_ref, v_ref, u_ref,
@@ -484,12 +499,13 @@ class TorqueProtection(dg.Entity):
         return delivered_torque(self._model, self._chains, _vector(self.q(t), n, "q"),
                                 _vector(self.q_dot(t), n, "q_dot"), self.current(t))
 
-    @dg.output(shape=None, depends=("torque", "q", "q_dot"))
+    @dg.output(shape=None, depends=("torque", "q", "q_dot", "q_ddot"))
     def reference_current(self, t: int) -> np.ndarray:
         """``i*``: the current that delivers the commanded torque (unfiltered)."""
         n = self.size
         return reference(self._model, self._chains, _vector(self.torque(t), n, "torque"),
-                         _vector(self.q(t), n, "q"), _vector(self.q_dot(t), n, "q_dot"), 1, self.knot_step)[2][0]
+                         _vector(self.q(t), n, "q"), _vector(self.q_dot(t), n, "q_dot"), 1, self.knot_step,
+                         self._acceleration(t))[2][0]
 
     @dg.output(shape=None, depends=("plan",))
     def predicted_q(self, t: int) -> np.ndarray:

@@ -115,3 +115,17 @@ def test_the_entity_reports_its_plan_barriers_and_solve() -> None:
     assert protection.solve_time(0) > 0.0
     np.testing.assert_allclose(protection.predicted_q(0)[:, 0], [-1.0, -1.5])
     assert np.all(np.abs(protection.current(0)) < 6.0)
+
+
+def test_a_commanded_acceleration_replaces_the_link_models_in_the_demanded_current() -> None:
+    protection = TorqueProtection("protection", chains=[ELBOW, ELBOW], dt=0.001)
+    protection.torque.set(np.array([12.0, 12.0]))
+    protection.q.set(np.array([-1.0, -1.0]))
+    protection.q_dot.set(np.zeros(2))
+    model_based = protection.reference_current(0).copy()
+    protection.q_ddot.set(np.array([2.0, np.nan]))  # NaN: that joint keeps the link model's
+    given = protection.reference_current(1)
+    off_m = ELBOW.off_m  # tanh(mu * 0) = 0: only the offset of the motor-side friction at rest
+    assert given[0] == pytest.approx((12.0 + ELBOW.I_m * 2.0 + off_m) / R_KM, rel=1e-12)
+    assert given[1] == pytest.approx(model_based[1], rel=1e-12)
+    assert abs(given[0] - model_based[0]) > 0.5  # the link model's acceleration is far from 2 rad/s² here
