@@ -106,6 +106,35 @@ class Scene:
                                    size=[radius, 0.0, 0.0], mass=0.0, density=0.0, rgba=[0.2, 0.2, 0.25, 1.0],
                                    friction=[0.5, 0.005, 0.0001], contype=1, conaffinity=0, group=SCENE_GROUP)
 
+    def wall(self, name: str, front_x: float, center: Sequence[float], size: Sequence[float],
+             thickness: float = 0.02, window: Sequence[float] | None = None, friction: float = 0.5,
+             ) -> list[mujoco.MjsGeom]:
+        """A static vertical wall facing the robot: its front face is the plane ``x = front_x``
+        (normal -x), centred at ``(y, z) = center``, ``size = (width, height)``, ``thickness`` deep.
+
+        ``window = (y, z, side)``: a square opening of that side (m) centred at ``(y, z)`` on the
+        front face, filled by a plate of the same thickness, a mocap body ``<name>_plate`` that
+        :mod:`dgraph_sim.disturbances` can remove (a hole breaking through): the wall is then four
+        static boxes around the window. Returns the geoms (the plate's last)."""
+        cy, cz = center
+        width, height = size
+        x = front_x + thickness / 2.0
+        rgba = (0.7, 0.72, 0.75, 1.0)
+        if window is None:
+            return [self.box(name, (thickness, width, height), (x, cy, cz), friction=friction, rgba=rgba)]
+        wy, wz, side = window
+        y0, y1, z0, z1 = cy - width / 2.0, cy + width / 2.0, cz - height / 2.0, cz + height / 2.0
+        a, b, c, d = wy - side / 2.0, wy + side / 2.0, wz - side / 2.0, wz + side / 2.0
+        if not (y0 < a and b < y1 and z0 < c and d < z1):
+            raise ValueError(f"the window of {name!r} is not inside the wall")
+        parts = [(f"{name}_left", y0, a, z0, z1), (f"{name}_right", b, y1, z0, z1),
+                 (f"{name}_bottom", a, b, z0, c), (f"{name}_top", a, b, d, z1)]
+        geoms = [self.box(n, (thickness, hi_y - lo_y, hi_z - lo_z), (x, (lo_y + hi_y) / 2.0, (lo_z + hi_z) / 2.0),
+                          friction=friction, rgba=rgba) for n, lo_y, hi_y, lo_z, hi_z in parts]
+        geoms.append(self.box(f"{name}_plate", (thickness, side, side), (x, wy, wz), mocap=True, friction=friction,
+                              rgba=(0.75, 0.6, 0.35, 1.0)))
+        return geoms
+
     def light(self, pos: Sequence[float] = (0.0, -1.0, 4.0), direction: Sequence[float] = (0.0, 0.3, -1.0),
               ) -> mujoco.MjsLight:
         """A directional light casting shadows."""
@@ -179,8 +208,32 @@ def push(scene: Scene) -> None:
               friction=0.5, rgba=(0.55, 0.6, 0.7, 1.0))
 
 
+DRILL_TOOL_TIP = (0.15, 0.0, 0.06)
+"""The ``drill`` tool's tip in the Panda's ``panda_hand`` frame: an angle head, 15 cm along the
+hand's x axis, 6 cm down its z axis (horizontal when the hand points down), where
+``graphs/panda_drill.yaml`` puts the Pinocchio frame ``tool_tip``."""
+DRILL_WALL_X = 0.65
+"""Front face of the ``drill`` scene's wall: the plane ``x = 0.65`` m (normal -x)."""
+DRILL_HOLES = tuple((DRILL_WALL_X, -0.18 + 0.04 * k, 0.45) for k in range(10))
+"""Table 6.2's ten holes between the reference holes R1 (y = -0.22) and R2 (y = +0.22) at
+z = 0.45 m, 4 cm apart on the wall (scaled to the Panda's workspace; the thesis gives no spacing)."""
+DRILL_BREAKTHROUGH = 5
+"""The hole (index into :data:`DRILL_HOLES`) whose patch of wall is the removable plate ``wall_plate``."""
+
+
+def drill(scene: Scene) -> None:
+    """A Panda holding a 15 cm angle tool (a cylinder along the hand's x axis, radius 6 mm) in front of
+    a vertical wall (front face ``x = 0.65`` m, 0.8 x 0.5 m, 2 cm thick, centred at ``y = 0``, ``z = 0.45`` m); the
+    wall around hole :data:`DRILL_BREAKTHROUGH` is a 3 cm square plate, the mocap body ``wall_plate``,
+    that a simulation removes to break the hole through (thesis Ch. 6 drilling, Table 6.2)."""
+    scene.floor(friction=1.0)
+    scene.tool("panda_hand", start=(0.0, 0.0, 0.06), end=DRILL_TOOL_TIP, radius=0.006)
+    _, y, z = DRILL_HOLES[DRILL_BREAKTHROUGH]
+    scene.wall("wall", DRILL_WALL_X, center=(0.0, 0.45), size=(0.8, 0.5), window=(y, z, 0.03))
+
+
 SCENES: dict[str, Callable[[Scene], None]] = {"flat": flat, "block": block, "stairs": stairs, "slope": slope,
-                                              "push": push}
+                                              "push": push, "drill": drill}
 """Scenes by name (the robot's light and tracking camera are added by :func:`add_scene`)."""
 
 
