@@ -24,6 +24,10 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
+GRAVITY = 9.81
+"""g (m/s²), as in the chain's gravity torque ``g (M_Y sin q + M_X cos q)`` (shared by the actuator
+modules)."""
+
 
 @dataclass(frozen=True)
 class ChainParameters:

@@ -57,11 +57,9 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
-from dgraph.entities.actuators.chain import TALOS_ELBOW, ChainParameters
+from dgraph.entities.actuators.chain import GRAVITY, TALOS_ELBOW, ChainParameters
 from dgraph.errors import DGraphError
 
-GRAVITY = 9.81
-"""g (m/s²), as in the chain's gravity torque ``g (M_Y sin q + M_X cos q)``."""
 PHI_NAMES = ("M_X", "M_Y", "I_m", "F_vm", "F_sm", "off_m", "I_j", "F_vj", "F_sj", "off_j")
 """The base parameters of Eq. 3.9, in the regressor's column order."""
 PAYLOAD_NAMES = ("M_Xp", "M_Yp", "I_p")

@@ -75,9 +75,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 import dgraph as dg
-from dgraph.entities.actuators.chain import TALOS_ELBOW, ChainParameters, friction
+from dgraph.entities.actuators.chain import GRAVITY, TALOS_ELBOW, ChainParameters, friction
 
-GRAVITY = 9.81
 EXPONENT_CAP = 150.0
 """Barrier exponents are capped here (far beyond a limit) so that ``C_s^2`` stays finite."""
 
