@@ -58,10 +58,11 @@ A barrier that starts acting early is the price: on the elbow, a demand of 5.3 A
 **Solver** (Li and Todorov's iLQR, thesis §3.4.3, Eqs. 3.16-3.17), vectorised over joints
 (each joint is its own problem; the arrays hold all joints): Riccati backward pass with a
 Levenberg term on ``Q_uu`` (raised for a joint whose line search fails), forward pass with the
-feedback gains and a backtracking line search per joint, stop when every joint's cost decrease
-is below ``tolerance`` (relative) or after ``max_iterations``; warm start from the previous plan
-shifted by the elapsed time (one knot when the re-solve period equals the knot step), clipped to
-the current limits (Newton steps on an exponential barrier crawl from far outside it).
+feedback gains and a backtracking line search per joint, stop when every joint has converged (its
+step accepted and its cost decrease below ``tolerance``, relative) or has its regularisation past
+:data:`REGULARISATION_CAP` (reported as :attr:`Solution.capped`), or after ``max_iterations``;
+warm start from the previous plan shifted by the elapsed time (one knot when the re-solve period
+equals the knot step), clipped to the current limits (Newton steps on an exponential barrier crawl from far outside it).
 """
 
 from __future__ import annotations
@@ -79,6 +80,9 @@ from dgraph.entities.actuators.chain import GRAVITY, TALOS_ELBOW, ChainParameter
 
 EXPONENT_CAP = 150.0
 """Barrier exponents are capped here (far beyond a limit) so that ``C_s^2`` stays finite."""
+REGULARISATION_CAP = 1e8
+"""The iLQR gives up on a joint whose Levenberg term on ``Q_uu`` passes this (its steps are then
+negligible): :attr:`Solution.capped`."""
 
 
 @dataclass(frozen=True)
@@ -185,6 +189,8 @@ class Solution:
     """(N, n, 2): the feedback ``K`` of each knot"""
     cost: np.ndarray
     iterations: int
+    capped: np.ndarray
+    """(n,) bool: the joint's line search kept failing until the regularisation passed its cap"""
 
 
 def _costs(model: Model, lim: Limits, w: Weights, q: np.ndarray, v: np.ndarray, u: np.ndarray,
@@ -223,6 +229,7 @@ def solve(model: Model, lim: Limits, w: Weights, q0: np.ndarray, v0: np.ndarray,
     tau_max = model.R_Km * lim.i_max
     rk = model.R_Km
     iterations = 0
+    capped = np.zeros(n, dtype=bool)
     for iterations in range(1, max_iterations + 1):  # noqa: B007 (returned)
         # cost derivatives (Eqs. 3.24-3.31, with P on the torque barrier)
         cq, dcq, ddcq = barrier(q, lim.q_min, lim.q_max, w.lam_q)
@@ -292,9 +299,13 @@ def solve(model: Model, lim: Limits, w: Weights, q0: np.ndarray, v0: np.ndarray,
         decrease = cost - new_cost
         reg = np.where(accepted, np.maximum(reg * 0.1, 1e-9), reg * 10.0)
         u, q, v, cost = new_u, new_q, new_v, new_cost
-        if np.all(decrease <= tolerance * np.maximum(cost, 1e-12)):
+        # a joint has converged when its step was accepted and barely lowered the cost; one whose
+        # line search failed is not (its decrease is 0): it retries with the raised regularisation
+        # until the cap, where the steps are too small to matter
+        capped = reg > REGULARISATION_CAP
+        if np.all((accepted & (decrease <= tolerance * np.maximum(cost, 1e-12))) | capped):
             break
-    return Solution(u=u, q=q, v=v, gains=gains, cost=cost, iterations=iterations)
+    return Solution(u=u, q=q, v=v, gains=gains, cost=cost, iterations=iterations, capped=capped)
 
 
 def reference(model: Model, chains: Sequence[ChainParameters], torque: np.ndarray, q: np.ndarray,

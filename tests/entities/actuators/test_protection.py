@@ -7,8 +7,17 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from dgraph.entities.actuators.chain import TALOS_ELBOW, ChainParameters
-from dgraph.entities.actuators.protection import GRAVITY, Model, TorqueProtection, barrier, huber
+from dgraph.entities.actuators.chain import GRAVITY, TALOS_ELBOW, TALOS_ELBOW_R_KM, ChainParameters
+from dgraph.entities.actuators.protection import (
+    Limits,
+    Model,
+    TorqueProtection,
+    Weights,
+    barrier,
+    huber,
+    reference,
+    solve,
+)
 
 R_KM = 5.3
 """R K_m of the elbow (N m/A): not in the thesis (Table 3.1 withholds it); a gap-filler, change it here."""
@@ -129,3 +138,18 @@ def test_a_commanded_acceleration_replaces_the_link_models_in_the_demanded_curre
     assert given[0] == pytest.approx((12.0 + ELBOW.I_m * 2.0 + off_m) / R_KM, rel=1e-12)
     assert given[1] == pytest.approx(model_based[1], rel=1e-12)
     assert abs(given[0] - model_based[0]) > 0.5  # the link model's acceleration is far from 2 rad/s² here
+
+
+def test_a_failed_line_search_does_not_stop_the_ilqr() -> None:
+    """At rest near the upper position limit with no torque, the first step's line search fails
+    (the barrier's curvature); the solve must retry with a raised regularisation, not stop."""
+    chains = [replace(TALOS_ELBOW, R_Km=TALOS_ELBOW_R_KM)] * 3
+    model = Model.from_chains(chains)
+    limits = Limits(np.full(3, Q_MIN), np.zeros(3), np.full(3, 4.58), np.full(3, 6.0))
+    q, v = np.array([-0.03, -0.02, -0.01]), np.zeros(3)
+    q_ref, v_ref, u_ref = reference(model, chains, np.zeros(3), q, v, 5, 0.003)
+    one = solve(model, limits, Weights(), q, v, q_ref, v_ref, u_ref, u_ref.copy(), 0.003, max_iterations=1)
+    full = solve(model, limits, Weights(), q, v, q_ref, v_ref, u_ref, u_ref.copy(), 0.003, max_iterations=50)
+    assert full.iterations > 1
+    assert np.all(full.cost < 0.95 * one.cost), (full.cost, one.cost)
+    assert full.capped.shape == (3,) and full.capped.dtype == bool
