@@ -111,6 +111,45 @@ class ChainFileError(ValueError):
     """An actuator parameter file that cannot be used; the message names the file and the joint or line."""
 
 
+def _load_unique_keys(text: str, path: str) -> object:
+    """The document of ``text`` read with dgraph's bounded safe loader
+    (:data:`dgraph.files.source._SAFE_LOADER`, the graph files'), refusing a key written twice in
+    one mapping (YAML would keep the last silently) with the line of the second; anchors, aliases
+    and merge keys stay allowed (the shipped file writes the right elbow as ``*elbow``)."""
+    import yaml
+
+    from dgraph.files.source import _SAFE_LOADER, _LimitExceeded
+
+    loader = _SAFE_LOADER(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        stack, seen = [node], set()
+        while stack:
+            current = stack.pop()
+            if id(current) in seen:
+                continue
+            seen.add(id(current))
+            if isinstance(current, yaml.MappingNode):
+                keys: dict[str, int] = {}
+                for key_node, value_node in current.value:
+                    if isinstance(key_node, yaml.ScalarNode) and key_node.tag != "tag:yaml.org,2002:merge":
+                        line = key_node.start_mark.line + 1
+                        if key_node.value in keys:
+                            raise ChainFileError(f"{path}, line {line}: duplicate key {key_node.value!r} (first at "
+                                                 f"line {keys[key_node.value]})")
+                        keys[key_node.value] = line
+                    stack.append(value_node)
+            elif isinstance(current, yaml.SequenceNode):
+                stack.extend(current.value)
+        return loader.construct_document(node)
+    except _LimitExceeded as exc:
+        raise ChainFileError(f"{path}{'' if exc.line is None else f', line {exc.line}'}: {exc}") from None
+    finally:
+        loader.dispose()
+
+
 def load_chain_file(path: str | os.PathLike[str]) -> dict[str, ChainParameters]:
     """The chains of an actuator parameter file (YAML, read with the safe loader), by joint name.
 
@@ -124,9 +163,12 @@ def load_chain_file(path: str | os.PathLike[str]) -> dict[str, ChainParameters]:
     frictions non-negative); ``R_Km`` and ``i_max`` are required (their defaults mean nothing
     for a real chain), the others default to the dataclass's. Other top-level keys than
     ``joints`` (``source``, ``notes``...) are allowed and ignored. A bad file raises
-    :class:`ChainFileError` naming the file and the joint and key, or the line of a YAML error.
+    :class:`ChainFileError` naming the file and the joint and key, or the line of a YAML error or
+    of a key written twice in one mapping (a joint, or a parameter of a joint).
     """
     import yaml
+
+    from dgraph.files.source import _yaml_reason
 
     path = os.fspath(path)
     try:
@@ -134,21 +176,21 @@ def load_chain_file(path: str | os.PathLike[str]) -> dict[str, ChainParameters]:
         if size > MAX_CHAIN_FILE_BYTES:
             raise ChainFileError(f"{path}: {size} bytes, more than the {MAX_CHAIN_FILE_BYTES} allowed")
         with open(path, encoding="utf-8") as f:
-            document = yaml.safe_load(f)
+            document = _load_unique_keys(f.read(), path)
     except OSError as exc:
         raise ChainFileError(f"cannot read actuator file {path}: {exc.strerror or exc}") from None
     except UnicodeDecodeError as exc:
         raise ChainFileError(f"{path}: not UTF-8 text ({exc.reason})") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
-        where = f", line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise ChainFileError(f"{path}{where}: not valid YAML: {problem}") from None
+        where = f", line {mark.line + 1}" if mark is not None else ""
+        problem = _yaml_reason(exc, getattr(exc, "problem", None) or str(exc)).removeprefix("invalid YAML")
+        raise ChainFileError(f"{path}{where}: not valid YAML{problem}") from None
     if not isinstance(document, dict) or not isinstance(document.get("joints"), dict) or not document["joints"]:
         raise ChainFileError(f"{path}: expected a mapping with a non-empty 'joints' mapping (joint name -> parameters)")
     names = set(ChainParameters.names())
     chains = {}
-    for joint, values in document["joints"].items():
+    for joint, values in document["joints"].items():  # keys are unique: _load_unique_keys
         where = f"{path}: joint {joint!r}"
         if not isinstance(joint, str) or not isinstance(values, dict):
             raise ChainFileError(f"{where}: expected a joint name mapped to its parameters")

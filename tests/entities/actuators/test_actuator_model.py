@@ -76,6 +76,10 @@ def test_q_ddot_defaults_to_zero():
     ("joints:\n  arm_left_4_joint: {R_Km: -3.0, i_max: 6.0}\n", "R_Km must be positive"),
     ("joints:\n  arm_left_4_joint: {R_Km: !!python/object:os.system x, i_max: 6.0}\n", "not valid YAML"),
     ("other: 1\n", "'joints'"),
+    # a joint written twice: YAML would keep the last silently
+    ("joints:\n  arm_left_4_joint: {R_Km: 3.0, i_max: 6.0}\n  arm_left_4_joint: {R_Km: 9.0, i_max: 6.0}\n",
+     "line 3: duplicate key 'arm_left_4_joint' \\(first at line 2\\)"),
+    ("joints:\n  arm_left_4_joint:\n    R_Km: 3.0\n    i_max: 6.0\n    R_Km: 9.0\n", "line 5: duplicate key 'R_Km'"),
 ])
 def test_bad_files_are_located(tmp_path, text, match):
     bad = tmp_path / "chains.yaml"
