@@ -319,6 +319,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
         raise RecordingError("--payload-recording, --payload-mass and --payload-arm go together")
     if args.payload_recording and args.drive_gain is not None:
         raise RecordingError("the scale comes from the payload or from --drive-gain, not both")
+    if args.yaml and (not args.joint_name or args.i_max is None):
+        raise RecordingError("--yaml writes an actuator file: it needs --joint-name (the robot's joint) and --i-max "
+                             "(the drive's current limit, A: not identified)")
+    if args.i_max is not None and not args.i_max > 0:
+        raise RecordingError(f"--i-max must be positive (A), got {args.i_max}")
     payload = Payload(args.payload_mass, args.payload_arm) if args.payload_recording else None
     columns = {"time": args.time, "position": args.position, "current": args.current, "torque": args.torque,
                "velocity": args.velocity}
@@ -332,8 +337,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.yaml:
         import yaml
 
-        Path(args.yaml).write_text(yaml.safe_dump(result.yaml_mapping(), sort_keys=False))
-        print(f"wrote {args.yaml}")
+        Path(args.yaml).write_text(yaml.safe_dump(result.actuator_file(args.joint_name, args.i_max), sort_keys=False))
+        print(f"wrote {args.yaml} (actuator file: joint {args.joint_name}, i_max {args.i_max:g} A)")
     return 0
 
 
@@ -368,7 +373,13 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                       help="keep one sample in N after filtering (default: 4 samples per cutoff period)")
     proc.add_argument("--min-velocity", type=float, default=0.05, metavar="RAD_S",
                       help="leave out samples slower than this, where sign(q_dot) is undefined (default 0.05)")
-    ident.add_argument("--yaml", metavar="OUT", help="also write the identified parameters to this YAML file")
+    out = ident.add_argument_group("actuator file")
+    out.add_argument("--yaml", metavar="OUT", help="also write the identified parameters as an actuator file "
+                                                   "(load_chain_file's format: joints: {NAME: {...}}); needs "
+                                                   "--joint-name and --i-max")
+    out.add_argument("--joint-name", metavar="NAME", help="the robot joint the chain drives, e.g. arm_left_4_joint")
+    out.add_argument("--i-max", type=float, metavar="A", help="the drive's current limit (A; not identified; inf "
+                                                              "for none)")
     ident.set_defaults(func=cmd_identify)
 
 

@@ -11,7 +11,7 @@ import yaml
 
 from dgraph.cli import main
 from dgraph.entities.actuators import identification as idn
-from dgraph.entities.actuators.chain import ChainParameters, friction
+from dgraph.entities.actuators.chain import ChainParameters, friction, load_chain_file
 
 TRUTH = idn.DEMO_CHAIN  # TALOS's elbow (Table 3.1), R K_m = 5.3 N m/A
 PAYLOAD = idn.DEMO_PAYLOAD  # 2 kg at 0.25 m
@@ -140,16 +140,68 @@ def test_dgraph_identify_prints_the_table_and_writes_yaml(tmp_path, capsys):
     plain, loaded = idn.write_demo_recordings(tmp_path)
     out = tmp_path / "elbow.yaml"
     code = main(["identify", str(plain), "--payload-recording", str(loaded), "--payload-mass", "2",
-                 "--payload-arm", "0.25", "--yaml", str(out)])
+                 "--payload-arm", "0.25", "--yaml", str(out), "--joint-name", "arm_left_4_joint", "--i-max", "6"])
     printed = capsys.readouterr().out
     assert code == 0, printed
     rows = {line.split()[0]: line.split()[1:] for line in printed.splitlines() if line.split()}
     assert float(rows["R_Km"][0]) == pytest.approx(5.3, rel=0.005)
     assert float(rows["K_j"][0]) == pytest.approx(1.015, rel=0.005)
     assert "cond(W)" in printed and "sigma%" in printed
-    written = yaml.safe_load(out.read_text())
-    params = ChainParameters(**written)
-    assert params.R_Km == pytest.approx(5.3, rel=0.005) and params.F_sm == pytest.approx(4.0, rel=0.03)
+    # the written file is an actuator file: load_chain_file reads it back, equal to the estimates
+    chains = load_chain_file(out)
+    assert list(chains) == ["arm_left_4_joint"]
+    params = chains["arm_left_4_joint"]
+    plain_rec, loaded_rec = (idn.load_recording(p) for p in (plain, loaded))
+    expected = idn.identify([idn.samples_of(plain_rec), idn.samples_of(loaded_rec, PAYLOAD)])
+    assert params == replace(ChainParameters(), **expected.yaml_mapping(), i_max=6.0)  # exact: floats round-trip
+    assert params.R_Km == pytest.approx(5.3, rel=TOLERANCE["R_Km"])
+    assert "arm_left_4_joint" in yaml.safe_load(out.read_text())["joints"]
+
+
+def test_dgraph_identify_yaml_needs_the_joint_and_i_max(tmp_path, capsys):
+    plain, _ = idn.write_demo_recordings(tmp_path)
+    out = tmp_path / "elbow.yaml"
+    base = ["identify", str(plain), "--drive-gain", "5.3", "--yaml", str(out)]
+    assert main(base) == 2 and "--joint-name" in capsys.readouterr().err
+    assert main([*base, "--joint-name", "elbow"]) == 2 and "--i-max" in capsys.readouterr().err
+    assert main([*base, "--joint-name", "elbow", "--i-max", "-1"]) == 2 and not out.exists()
+    assert main([*base, "--joint-name", "elbow", "--i-max", "inf"]) == 0
+    assert load_chain_file(out)["elbow"].i_max == float("inf")
+
+
+def test_a_payload_arm_of_the_wrong_sign_is_refused(recordings):
+    flipped = idn.Payload(PAYLOAD.mass, -PAYLOAD.arm)
+    with pytest.raises(ValueError, match=r"R_Km = -.*K_j = -.*sign of the payload's arm"):
+        idn.identify([idn.samples_of(recordings[0]), idn.samples_of(recordings[1], flipped)])
+    with pytest.raises(ValueError, match="R_Km = -5.3.*drive_gain"):
+        idn.identify([exact_samples(TRUTH, None, 4)], drive_gain=-5.3)
+
+
+def test_dgraph_identify_refuses_a_npy_file_and_names_it(tmp_path, capsys):
+    bad = tmp_path / "x.npy"
+    np.save(bad, np.zeros((10, 4)))
+    assert main(["identify", str(bad), "--drive-gain", "5.3"]) == 2
+    err = capsys.readouterr().err
+    assert str(bad) in err and "not an .npz archive" in err
+    junk = tmp_path / "junk.npz"
+    junk.write_bytes(b"PK\x03\x04 not a zip")
+    assert main(["identify", str(junk), "--drive-gain", "5.3"]) == 2 and str(junk) in capsys.readouterr().err
+
+
+def test_a_nan_in_a_column_is_named_with_its_first_sample(tmp_path, capsys, recordings):
+    data = dict(recordings[0])
+    data["position"] = data["position"].copy()
+    data["position"][[1234, 5000]] = np.nan
+    path = tmp_path / "nan.npz"
+    np.savez(path, **data)
+    assert main(["identify", str(path), "--drive-gain", "5.3"]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err and "column 'position' (position) is not finite at 2 sample(s), the first at sample 1234" \
+        in err
+    with pytest.raises(ValueError, match="column 'torque' is not finite at 1 sample.*sample 7"):
+        torque = data["torque"].copy()
+        torque[7] = np.inf
+        idn.prepare(data["time"], recordings[0]["position"], data["current"], torque)
 
 
 def test_dgraph_identify_names_the_missing_column_and_exits_2(tmp_path, capsys):

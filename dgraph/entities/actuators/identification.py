@@ -50,6 +50,7 @@ is anywhere in ``[-F_s, F_s]``. :func:`simulate_chain` generates such recordings
 
 from __future__ import annotations
 
+import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -150,9 +151,13 @@ def prepare(time: np.ndarray, q: np.ndarray, current: np.ndarray, torque: np.nda
     time = np.asarray(time, dtype=float)
     columns = {"q": q, "current": current, "torque": torque} | ({} if velocity is None else {"velocity": velocity})
     data = {name: np.asarray(x, dtype=float).ravel() for name, x in columns.items()}
-    for name, x in data.items():
-        if x.shape != time.shape:
+    for name, x in {"time": time.ravel(), **data}.items():
+        if name != "time" and x.shape != time.shape:
             raise ValueError(f"{name} has {x.size} samples, time has {time.size}")
+        bad = np.flatnonzero(~np.isfinite(x))
+        if bad.size:
+            raise ValueError(f"column {name!r} is not finite at {bad.size} sample(s), the first at sample "
+                             f"{bad[0]} ({x[bad[0]]!r}); the filter would spread it over the whole recording")
     if time.size < 3 or not np.all(np.diff(time) > 0):
         raise ValueError("time must increase, with at least 3 samples")
     dt = float(np.median(np.diff(time)))
@@ -205,9 +210,22 @@ class Identification:
 
     def yaml_mapping(self) -> dict[str, float]:
         """The identified parameters (:data:`PHI_NAMES`, ``R_Km``, ``K_j``; :class:`ChainParameters`
-        names) as a plain mapping, for an actuator file; ``i_max`` is not identified and left out."""
+        names) as a plain mapping; ``i_max`` is not identified and left out."""
         return {name: float(getattr(self.parameters, name)) for name in ChainParameters.names()
                 if name in (*PHI_NAMES, "R_Km", "K_j")}
+
+    def actuator_file(self, joint: str, i_max: float) -> dict[str, object]:
+        """An actuator parameter file's document (what
+        :func:`~dgraph.entities.actuators.chain.load_chain_file` reads): ``{source: ..., joints:
+        {joint: {<the identified parameters>, i_max}}}``. ``i_max`` (A, positive, may be inf) is not
+        identified: the caller gives it (the drive's current limit)."""
+        if not joint or not isinstance(joint, str):
+            raise ValueError("the joint name must be a non-empty string")
+        if not i_max > 0:  # also refuses NaN
+            raise ValueError(f"i_max must be positive (A), got {i_max!r}")
+        return {"source": f"dgraph identify (total least squares, thesis Eqs. 3.9-3.12; scale: {self.scale}); "
+                          "i_max given, not identified",
+                "joints": {joint: {**self.yaml_mapping(), "i_max": float(i_max)}}}
 
 
 def total_regressor(experiments: Sequence[Samples]) -> np.ndarray:
@@ -236,12 +254,13 @@ def identify(experiments: Sequence[Samples], *, drive_gain: float | None = None,
     experiments = list(experiments)
     loaded = [exp for exp in experiments if exp.payload is not None]
     w_tot = total_regressor(experiments)
-    if loaded:
+    carried = next((exp.payload for exp in loaded if exp.payload is not None), None)
+    if carried is not None:
         known = TOTAL_NAMES.index("M_Yp")
-        value = loaded[0].payload.first_moment
-        if any(exp.payload != loaded[0].payload for exp in loaded):
+        value = carried.first_moment
+        if any(exp.payload != carried for exp in loaded):
             raise ValueError("the payload experiments must carry the same payload")
-        scale = f"M_Yp = {loaded[0].payload.mass:g} kg x {loaded[0].payload.arm:g} m"
+        scale = f"M_Yp = {carried.mass:g} kg x {carried.arm:g} m"
         columns = list(range(len(TOTAL_NAMES)))
     elif drive_gain is not None:
         known = TOTAL_NAMES.index("R_Km")
@@ -261,6 +280,14 @@ def identify(experiments: Sequence[Samples], *, drive_gain: float | None = None,
     theta = v * (value / v[known])
     names = [TOTAL_NAMES[c] for c in columns]
     estimates = dict(zip(names, theta.tolist(), strict=True))
+    wrong = [name for name in ("R_Km", "K_j") if not estimates[name] > 0]
+    if wrong:
+        given = ("the payload's first moment M_Yp = mass x arm: check the sign of the payload's arm (its centre "
+                 "of mass along the link's Y axis, the side of the forearm's own M_Y) and of its mass"
+                 if carried is not None else "the given R K_m (drive_gain): it must be positive")
+        raise ValueError(f"the scale gives {', '.join(f'{n} = {estimates[n]:.4g}' for n in wrong)}, which must be "
+                         f"positive (the current and the torque sensor read the joint torque with a positive gain): "
+                         f"the scale comes from {given}; every estimate has the wrong sign")
 
     # sigma%: the known column moved to the right-hand side, ordinary least-squares covariance
     rows = w_tot.shape[0]
@@ -463,7 +490,12 @@ def load_recording(path: str | Path, columns: Mapping[str, str | None] | None = 
     :class:`RecordingError` naming the file and the column."""
     wanted = dict(COLUMNS) | {k: v for k, v in (columns or {}).items() if v}
     try:
-        with np.load(path, allow_pickle=False) as data:
+        loaded = np.load(path, allow_pickle=False)
+        if not isinstance(loaded, np.lib.npyio.NpzFile):
+            raise RecordingError(f"{path}: a single array ({type(loaded).__name__}), not an .npz archive of named "
+                                 "columns (write one with numpy.savez(path, time=..., position=..., current=..., "
+                                 "torque=...), or the Recorder's data())")
+        with loaded as data:
             keys = list(data.keys())
             missing = [f"{role} column {key!r}" for role, key in wanted.items() if key not in keys]
             if missing:
@@ -479,8 +511,12 @@ def load_recording(path: str | Path, columns: Mapping[str, str | None] | None = 
                 if column.ndim != 1:
                     raise RecordingError(f"{path}: column {key!r} has shape {column.shape}, expected one "
                                          "value per sample")
+                bad = np.flatnonzero(~np.isfinite(column))
+                if bad.size:
+                    raise RecordingError(f"{path}: column {key!r} ({role}) is not finite at {bad.size} sample(s), "
+                                         f"the first at sample {bad[0]} ({column[bad[0]]!r})")
                 out[role] = column
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         if isinstance(exc, RecordingError):
             raise
         raise RecordingError(f"{path}: cannot read the recording: {exc}") from None
