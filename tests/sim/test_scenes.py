@@ -50,6 +50,7 @@ def test_named_scenes_compile_with_light_and_camera():
         spec = mujoco.MjSpec()
         spec.worldbody.add_body(name="base").add_geom(size=[0.1, 0, 0])
         spec.worldbody.add_body(name="gripper_left_base_link")  # the push scene's tool hangs on TALOS's gripper
+        spec.worldbody.add_body(name="panda_hand")  # the drill scene's on the Panda's hand
         add_scene(spec, name, tracked_body="base")
         m = spec.compile()
         assert m.nlight == 1 and m.ncam == 2 and m.geom("floor").id >= 0  # side and front cameras
@@ -57,3 +58,18 @@ def test_named_scenes_compile_with_light_and_camera():
         add_scene(mujoco.MjSpec(), "moon")
     with pytest.raises(ValueError, match="needs the robot body 'gripper_left_base_link'"):
         add_scene(mujoco.MjSpec(), "push")
+
+
+def test_a_wall_with_a_window_is_four_boxes_around_a_removable_plate():
+    spec = mujoco.MjSpec()
+    Scene(spec).wall("wall", 0.65, center=(0.0, 0.45), size=(0.8, 0.5), thickness=0.02, window=(0.02, 0.45, 0.03))
+    m = spec.compile()
+    plate = m.body("wall_plate")
+    assert m.body_mocapid[plate.id] == 0 and np.allclose(plate.pos, [0.66, 0.02, 0.45])
+    boxes = [m.geom(n) for n in ("wall_left", "wall_right", "wall_bottom", "wall_top", "wall_plate")]
+    # the front faces at x = 0.65; the boxes and the plate tile the 0.8 x 0.5 m wall
+    assert all(np.isclose(m.geom_pos[g.id][0] if g.name != "wall_plate" else 0.66, 0.66) for g in boxes)
+    area = sum(4 * m.geom_size[g.id][1] * m.geom_size[g.id][2] for g in boxes)
+    assert np.isclose(area, 0.8 * 0.5)
+    with pytest.raises(ValueError, match="not inside the wall"):
+        Scene(mujoco.MjSpec()).wall("w", 0.65, center=(0.0, 0.45), size=(0.8, 0.5), window=(0.39, 0.45, 0.03))
