@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import dgraph as dg
+from dgraph.entities.actuators import ActuatorModel
 from dgraph.entities.actuators.chain import friction, load_chain_file
 from dgraph_sim.device import MujocoDevice
 from dgraph_sim.robots import apply_chains
@@ -103,3 +104,32 @@ def test_bad_actuator_file_is_a_located_param_error(tmp_path):
     bad.write_text("joints:\n  arm_left_4_joint: {R_Km: 3.0, i_max: 6.0}\n  no_such_joint: {R_Km: 1.0, i_max: 1.0}\n")
     with pytest.raises(dg.ParamError, match="actuators.*no_such_joint"):
         MujocoDevice("sim", actuators=str(bad), collisions="feet")
+
+
+def twin_acceleration(m, chain, q_dot: float, target: float, **params) -> float:
+    """MuJoCo's acceleration of the one-joint elbow driven through ActuatorModel, whose ``tau_j*``
+    comes from a rigid-body model with armature 0.1 (Pinocchio's TALOS) that knows the link and the
+    joint-side friction: ``tau_j* = (I_j + 0.1) a + F_vj q_dot + F_sj sign(q_dot)``."""
+    g = dg.Graph(dt=0.001)
+    model = g.add(ActuatorModel("chain", joints=[ELBOW], path=str(FILE), **params))
+    model.tau_desired.set([(0.33 + 0.1) * target + friction(chain.F_vj, chain.F_sj, 0.0, q_dot)])
+    model.q_dot.set([q_dot])
+    model.q_ddot.set([target])
+    assert not model.saturated(0)[0]
+    d = mujoco.MjData(m)
+    d.qvel[0] = q_dot
+    d.ctrl[0] = model.motor_torque(0)[0]
+    mujoco.mj_forward(m, d)
+    return float(d.qacc[0])
+
+
+@pytest.mark.parametrize(("q_dot", "target"), [(1.0, 2.0), (-0.5, 3.0), (1.5, -4.0)])
+def test_actuator_model_drives_the_mujoco_twin_exactly(elbow, q_dot, target):
+    """compensate_offsets false (the twin has no offset) and controller_armature 0.1 (already in
+    tau_j*): the sliding joint accelerates as commanded. The defaults (off_m compensated, the 0.1
+    counted twice) miss by (0.86 + 0.1 a) / (I_j + I_m)."""
+    m, chain = elbow
+    fixed = twin_acceleration(m, chain, q_dot, target, compensate_offsets=False, controller_armature=0.1)
+    assert fixed == pytest.approx(target, rel=1e-9)
+    default = twin_acceleration(m, chain, q_dot, target)
+    assert default - target == pytest.approx((0.86 + 0.1 * target) / (0.33 + 0.45), rel=1e-9)

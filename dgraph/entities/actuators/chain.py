@@ -220,6 +220,9 @@ def mujoco_joint(chain: ChainParameters) -> dict[str, float]:
     """What a MuJoCo joint driven by ``chain`` gets: ``armature`` = I_m (the link's inertia stays
     the rigid body's), ``damping`` = F_v = F_vm + F_vj, ``frictionloss`` = F_s = F_sm + F_sj,
     ``force_limit`` = R K_m i_max (the actuator's force range ±, and its ``ctrlrange``). The
-    offsets ``off_m``, ``off_j`` have no MuJoCo counterpart and are left out."""
+    offsets ``off_m``, ``off_j`` have no MuJoCo counterpart and are left out: an
+    :class:`~dgraph.entities.actuators.ActuatorModel` driving this twin takes
+    ``compensate_offsets: false``, and ``controller_armature`` = the armature of the controller's
+    own model (Pinocchio's), which its ``tau_j*`` already holds."""
     return {"armature": chain.I_m, "damping": chain.F_v, "frictionloss": chain.F_s,
             "force_limit": chain.R_Km * chain.i_max}

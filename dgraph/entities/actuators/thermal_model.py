@@ -60,8 +60,9 @@ def steady_temperature(current: ArrayLike, R_th: ArrayLike, R_TA: ArrayLike, T_A
                                                                                        denominator, 1.0), np.inf)
 
 
-def _n(entity: ThermalModel) -> tuple[int]:
-    return (entity.size,)
+def _n(entity: ThermalModel | dg.Entity) -> tuple[int]:
+    """One value per joint (the entity's ``size``): the shape of the actuator entities' signals."""
+    return (entity.size,)  # type: ignore[union-attr]
 
 
 @dg.register

@@ -62,6 +62,33 @@ def test_smoothing_is_tanh():
     assert a.current(0) * TALOS_ELBOW_R_KM == pytest.approx([5.1e-3 + 4.0 * np.tanh(1.0) + 0.86, 0.86])
 
 
+def test_controller_armature_is_not_compensated_twice():
+    # tau_j* from Pinocchio holds 0.1 q_ddot of armature: only I_m - 0.1 = 0.35 is added
+    a = model(controller_armature=0.1)
+    a.tau_desired.set([2.0, 2.0])
+    a.q_dot.set([0.0, 0.0])
+    a.q_ddot.set([3.0, -3.0])
+    assert a.current(0) * TALOS_ELBOW_R_KM == pytest.approx([2.0 + 0.35 * 3.0 + 0.86, 2.0 - 0.35 * 3.0 + 0.86])
+    assert a.joint_torque(0) == pytest.approx([2.0 - 0.1 * 3.0, 2.0 + 0.1 * 3.0])  # the link's part of tau_j*
+    per_joint = model(controller_armature=[0.1, 0.45])
+    per_joint.tau_desired.set([0.0, 0.0])
+    per_joint.q_dot.set([0.0, 0.0])
+    per_joint.q_ddot.set([1.0, 1.0])
+    assert per_joint.current(0) * TALOS_ELBOW_R_KM == pytest.approx([0.35 + 0.86, 0.86])
+    with pytest.raises(dg.ParamError, match="controller_armature"):
+        model(controller_armature=[0.1, 0.1, 0.1])
+
+
+def test_offsets_can_be_left_to_a_plant_without_them():
+    a = model(compensate_offsets=False)
+    a.tau_desired.set([1.0, -1.0])
+    a.q_dot.set([0.5, 0.0])
+    assert a.current(0) * TALOS_ELBOW_R_KM == pytest.approx([1.0 + 5.1 * 0.5 + 4.0, -1.0])
+    assert a.joint_torque(0) == pytest.approx([1.0, -1.0])
+    assert a.motor_friction(np.array([0.0, 0.0])) == pytest.approx([0.0, 0.0])
+    assert model().motor_friction(np.array([0.0, 0.0])) == pytest.approx([0.86, 0.86])
+
+
 def test_q_ddot_defaults_to_zero():
     a = model()
     a.tau_desired.set([1.0, 1.0])
