@@ -92,8 +92,8 @@ class Weights:
     Q_q: float = 40.0
     Q_qd: float = 0.01
     R: float = 1e-4
-    S: float = 1.0
-    delta: float = 10.0
+    S: float = 50.0
+    delta: float = 0.3
     W_q: float = 1.0
     W_qd: float = 0.1
     P: float = 10.0
@@ -340,24 +340,62 @@ def delivered_torque(model: Model, chains: Sequence[ChainParameters], q: np.ndar
     return out
 
 
-def _vector(value: Any, n: int, name: str) -> np.ndarray:
-    out = np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy() if np.size(value) in (1, n) else None
-    if out is None:
-        raise dg.ParamError(f"{name}: expected 1 or {n} values, got {np.size(value)}")
-    return out
+def _param_vector(value: Any, n: int, name: str, entity: str) -> np.ndarray:
+    """A parameter given as one value for every joint or one per joint."""
+    array = np.asarray(value, dtype=float)
+    if array.ndim > 1 or array.size not in (1, n):
+        raise dg.ParamError(f"{entity}: parameter {name!r}: expected 1 or {n} values (one per joint), got "
+                            f"{array.size}", entity=entity)
+    return np.broadcast_to(array.reshape(-1), (n,)).copy()
 
 
-def _chain_list(chains: Any) -> list[ChainParameters]:
+def _chain_list(chains: Any, entity: str) -> list[ChainParameters]:
+    """``chains`` as one :class:`ChainParameters` per joint; a :class:`dg.ParamError` naming the joint
+    and the key for a malformed entry."""
     if chains is None:
         return [TALOS_ELBOW]
-    if isinstance(chains, ChainParameters):
-        return [chains]
-    if isinstance(chains, dict):
-        return [ChainParameters(**chains)]
-    out = [c if isinstance(c, ChainParameters) else ChainParameters(**c) for c in chains]
-    if not out:
-        raise dg.ParamError("chains: at least one joint")
+    if isinstance(chains, ChainParameters | dict):
+        chains = [chains]
+    if isinstance(chains, str) or not isinstance(chains, Sequence):
+        raise dg.ParamError(f"{entity}: parameter 'chains': expected a ChainParameters, a mapping or a list of "
+                            f"them, got {type(chains).__name__}", entity=entity)
+    if not chains:
+        raise dg.ParamError(f"{entity}: parameter 'chains': at least one joint", entity=entity)
+    names = set(ChainParameters.names())
+    out = []
+    for j, c in enumerate(chains):
+        where = f"{entity}: parameter 'chains', joint {j}"
+        if isinstance(c, ChainParameters):
+            out.append(c)
+            continue
+        if not isinstance(c, dict):
+            raise dg.ParamError(f"{where}: expected a ChainParameters or a mapping, got {type(c).__name__}",
+                                entity=entity)
+        unknown = sorted(str(k) for k in c if k not in names)
+        if unknown:
+            raise dg.ParamError(f"{where}: unknown key(s) {unknown}; known: {sorted(names)}", entity=entity)
+        for key, value in c.items():
+            if isinstance(value, bool) or not isinstance(value, int | float) or np.isnan(value):
+                raise dg.ParamError(f"{where}: key {key!r} must be a number, got {value!r}", entity=entity)
+        chain = ChainParameters(**{k: float(v) for k, v in c.items()})
+        for key in ("R_Km", "i_max"):
+            if not getattr(chain, key) > 0.0:
+                raise dg.ParamError(f"{where}: key {key!r} must be positive, got {getattr(chain, key)!r}",
+                                    entity=entity)
+        out.append(chain)
     return out
+
+
+def _n(entity: TorqueProtection) -> tuple[int]:
+    return (entity.size,)
+
+
+def _plan_shape(entity: TorqueProtection) -> tuple[int, int]:
+    return (entity.size, entity.knots + 1)
+
+
+def _barrier_shape(entity: TorqueProtection) -> tuple[int, int]:
+    return (entity.size, 3)
 
 
 @dg.register
@@ -408,8 +446,8 @@ class TorqueProtection(dg.Entity):
     lam_q = dg.Param(10.0, kind="float", minimum=1e-6, doc="position barrier sharpness")
     lam_qd = dg.Param(1.0, kind="float", minimum=1e-6, doc="velocity barrier sharpness")
     lam_tau = dg.Param(0.5, kind="float", minimum=1e-6, doc="motor torque barrier sharpness")
-    torque_weight = dg.Param(1.0, kind="float", minimum=0.0, doc="weight S of the torque tracking (not in the thesis)")
-    torque_scale = dg.Param(10.0, kind="float", minimum=1e-6,
+    torque_weight = dg.Param(50.0, kind="float", minimum=0.0, doc="weight S of the torque tracking (not in the thesis)")
+    torque_scale = dg.Param(0.3, kind="float", minimum=1e-6,
                             doc="delta (A): the torque tracking is quadratic below it, its pull bounded by 2 S delta")
     mu = dg.Param(1000.0, kind="float", minimum=0.0, doc="tanh smoothing of the dry friction (Eq. 3.18)")
     max_iterations = dg.Param(10, kind="int", minimum=1, doc="iLQR iterations per solve")
@@ -421,39 +459,52 @@ class TorqueProtection(dg.Entity):
             q_dot_max: ArrayLike = 4.58, i_max: ArrayLike | None = None, horizon: float = 0.015,
             knot_step: float = 0.003, resolve_every: int = 1, Q_q: float = 40.0, Q_qd: float = 0.01, R: float = 0.0001,
             W_q: float = 1.0, W_qd: float = 0.1, P: float = 10.0, lam_q: float = 10.0, lam_qd: float = 1.0,
-            lam_tau: float = 0.5, torque_weight: float = 1.0, torque_scale: float = 10.0, mu: float = 1000.0,
+            lam_tau: float = 0.5, torque_weight: float = 50.0, torque_scale: float = 0.3, mu: float = 1000.0,
             max_iterations: int = 10, tolerance: float = 0.001, dt: float | None = None,
         ) -> None: ...
 
-    torque = dg.Input(shape=None, doc="commanded joint torque tau_j* (N m)")
-    q = dg.Input(shape=None, doc="joint position (rad)")
-    q_dot = dg.Input(shape=None, doc="joint velocity (rad/s)")
-    q_ddot = dg.Input(shape=None, default=np.nan, finite=None,
-                      doc="joint acceleration the controller commands (rad/s²), for i*; NaN (default): the link "
-                      "model's")
+    torque = dg.Input(shape=_n, doc="commanded joint torque tau_j* (N m)")
+    q = dg.Input(shape=_n, doc="joint position (rad)")
+    q_dot = dg.Input(shape=_n, doc="joint velocity (rad/s)")
+    # declared per instance (its NaN default is sized by the joints): q_ddot (n), the acceleration
+    # the controller commands (rad/s²), for i*; NaN: the link model's
 
-    def _acceleration(self, t: int) -> np.ndarray:
-        return _vector(self.q_ddot(t), self.size, "q_ddot")
-
-    def setup(self) -> None:
-        """The model, limits and weights from the parameters."""
-        self._chains = _chain_list(self.params.get("chains"))
+    def configure(self) -> None:
+        """The chains, limits and weights from the parameters (checked), before the ports are sized."""
+        name = self.name
+        self._chains = _chain_list(self.params.get("chains"), name)
         n = len(self._chains)
         self._model = Model.from_chains(self._chains, self.mu)
         i_max = self.i_max if self.i_max is not None else [c.i_max for c in self._chains]
-        self._limits = Limits(_vector(self.q_min, n, "q_min"), _vector(self.q_max, n, "q_max"),
-                              _vector(self.q_dot_max, n, "q_dot_max"), _vector(i_max, n, "i_max"))
+        self._limits = Limits(_param_vector(self.q_min, n, "q_min", name), _param_vector(self.q_max, n, "q_max", name),
+                              _param_vector(self.q_dot_max, n, "q_dot_max", name),
+                              _param_vector(i_max, n, "i_max", name))
+        lim = self._limits
+        for key, values in (("q_min", lim.q_min), ("q_max", lim.q_max), ("q_dot_max", lim.qd_max)):
+            if not np.all(np.isfinite(values)):
+                raise dg.ParamError(f"{name}: parameter {key!r} must be finite, got {values.tolist()}", entity=name)
+        if not np.all(lim.i_max > 0.0) or np.any(np.isnan(lim.i_max)):
+            raise dg.ParamError(f"{name}: parameter 'i_max' must be > 0 (A), got {lim.i_max.tolist()}", entity=name)
+        if not np.all(lim.q_min < lim.q_max):
+            raise dg.ParamError(f"{name}: parameters 'q_min' < 'q_max' required per joint, got q_min "
+                                f"{lim.q_min.tolist()}, q_max {lim.q_max.tolist()}", entity=name)
+        if not np.all(lim.qd_max > 0.0):
+            raise dg.ParamError(f"{name}: parameter 'q_dot_max' must be > 0 (rad/s), got {lim.qd_max.tolist()}",
+                                entity=name)
         self._knots = max(1, round(self.horizon / self.knot_step))
         self._weights = Weights(
             Q_q=self.Q_q, Q_qd=self.Q_qd, R=self.R, S=self.torque_weight, delta=self.torque_scale, W_q=self.W_q,
             W_qd=self.W_qd, P=self.P, lam_q=self.lam_q, lam_qd=self.lam_qd, lam_tau=self.lam_tau)
-        self.reset()
+        self.declare("q_ddot", dg.Input(shape=(n,), default=np.full(n, np.nan), finite=None,
+                                        doc="joint acceleration the controller commands (rad/s²), for i*; NaN "
+                                        "(default, per joint): the link model's"))
 
     def reset(self) -> None:
         """No plan yet (the first solve starts from ``i*``)."""
         self._plan: Solution | None = None
         self._plan_tick = 0
         self._solve_time = 0.0
+        self._unclipped = np.zeros(self.size)
 
     @property
     def size(self) -> int:
@@ -478,11 +529,9 @@ class TorqueProtection(dg.Entity):
         """The last solution (re-solved every ``resolve_every`` ticks)."""
         if self._plan is not None and t - self._plan_tick < self.resolve_every:
             return self._plan
-        n = self.size
-        torque = _vector(self.torque(t), n, "torque")
-        q, v = _vector(self.q(t), n, "q"), _vector(self.q_dot(t), n, "q_dot")
-        q_ref, v_ref, u_ref = reference(self._model, self._chains, torque, q, v, self._knots, self.knot_step,
-                                        self._acceleration(t))
+        q, v = self.q(t), self.q_dot(t)
+        q_ref, v_ref, u_ref = reference(self._model, self._chains, self.torque(t), q, v, self._knots, self.knot_step,
+                                        self.q_ddot(t))
         elapsed = (t - self._plan_tick) * self.dt
         start = time.perf_counter()
         sol = solve(self._model, self._limits, self._weights, q, v, q_ref, v_ref, u_ref,
@@ -491,47 +540,52 @@ class TorqueProtection(dg.Entity):
         self._plan, self._plan_tick = sol, t
         return sol
 
-    @dg.output(shape=None, depends=("plan", "q", "q_dot", "t"))
+    @dg.output(shape=_n, depends=("plan", "q", "q_dot", "t"))
     def current(self, t: int) -> np.ndarray:
-        """The filtered current: the plan at the elapsed time with its feedback."""
+        """The filtered current: the plan at the elapsed time with its feedback, clipped to
+        ``±i_max`` (the barrier is soft: the clip is the last line of defence, ``saturated``)."""
         sol = self.plan(t)
         k = min(int(((t - self._plan_tick) * self.dt) / self.knot_step + 1e-9), self._knots - 1)
-        dq = _vector(self.q(t), self.size, "q") - sol.q[k]
-        dv = _vector(self.q_dot(t), self.size, "q_dot") - sol.v[k]
         if k == 0:
-            return sol.u[0].copy()
-        return sol.u[k] + sol.gains[k, :, 0] * dq + sol.gains[k, :, 1] * dv
+            raw = sol.u[0].copy()
+        else:
+            dq, dv = self.q(t) - sol.q[k], self.q_dot(t) - sol.v[k]
+            raw = sol.u[k] + sol.gains[k, :, 0] * dq + sol.gains[k, :, 1] * dv
+        self._unclipped = raw
+        return np.clip(raw, -self._limits.i_max, self._limits.i_max)
 
-    @dg.output(shape=None, depends=("current", "q", "q_dot"))
+    @dg.output(shape=_n, dtype="bool", depends=("current",))
+    def saturated(self, t: int) -> np.ndarray:
+        """Per joint: the plan asked more than ``i_max`` and ``current`` was clipped."""
+        self.current(t)
+        return np.abs(self._unclipped) > self._limits.i_max
+
+    @dg.output(shape=_n, depends=("current", "q", "q_dot"))
     def torque_out(self, t: int) -> np.ndarray:
         """The joint torque the filtered current delivers (model's ``q_ddot``)."""
-        n = self.size
-        return delivered_torque(self._model, self._chains, _vector(self.q(t), n, "q"),
-                                _vector(self.q_dot(t), n, "q_dot"), self.current(t))
+        return delivered_torque(self._model, self._chains, self.q(t), self.q_dot(t), self.current(t))
 
-    @dg.output(shape=None, depends=("torque", "q", "q_dot", "q_ddot"))
+    @dg.output(shape=_n, depends=("torque", "q", "q_dot", "q_ddot"))
     def reference_current(self, t: int) -> np.ndarray:
         """``i*``: the current that delivers the commanded torque (unfiltered)."""
-        n = self.size
-        return reference(self._model, self._chains, _vector(self.torque(t), n, "torque"),
-                         _vector(self.q(t), n, "q"), _vector(self.q_dot(t), n, "q_dot"), 1, self.knot_step,
-                         self._acceleration(t))[2][0]
+        return reference(self._model, self._chains, self.torque(t), self.q(t), self.q_dot(t), 1, self.knot_step,
+                         self.q_ddot(t))[2][0]
 
-    @dg.output(shape=None, depends=("plan",))
+    @dg.output(shape=_plan_shape, depends=("plan",))
     def predicted_q(self, t: int) -> np.ndarray:
         """The plan's positions (joints x knots+1)."""
         return self.plan(t).q.T.copy()
 
-    @dg.output(shape=None, depends=("plan",))
+    @dg.output(shape=_plan_shape, depends=("plan",))
     def predicted_q_dot(self, t: int) -> np.ndarray:
         """The plan's velocities (joints x knots+1)."""
         return self.plan(t).v.T.copy()
 
-    @dg.output(shape=None, depends=("current", "q", "q_dot"))
+    @dg.output(shape=_barrier_shape, depends=("current", "q", "q_dot"))
     def barriers(self, t: int) -> np.ndarray:
         """``C_s`` of ``q``, ``q_dot`` and ``tau_m`` at the current state and output (joints x 3)."""
-        n, lim, w = self.size, self._limits, self._weights
-        q, v = _vector(self.q(t), n, "q"), _vector(self.q_dot(t), n, "q_dot")
+        lim, w = self._limits, self._weights
+        q, v = self.q(t), self.q_dot(t)
         tau_max = self._model.R_Km * lim.i_max
         return np.stack([barrier(q, lim.q_min, lim.q_max, w.lam_q)[0],
                          barrier(v, -lim.qd_max, lim.qd_max, w.lam_qd)[0],
