@@ -43,16 +43,21 @@ delivers it, ``u* = (tau_j* + I_m q_ddot* + tau_fm(q_dot)) / (R K_m)`` with the 
 acceleration ``q_ddot* = (tau_j* - g(...) - tau_fj(q_dot)) / I_j`` (Eq. 3.1 split into its motor
 and joint sides), and ``x*`` the model's trajectory under ``u*`` held over the horizon. Without
 barriers the optimum is then ``u = u*``, ``x = x*``: the filter is transparent. The term
-``S rho(u - u*)`` (``torque_weight``, ``torque_scale``; not in the thesis) is needed because over a 15 ms horizon a
-current hardly moves the position (about 8e-4 rad per A on the elbow), so ``Q`` alone gives the
-torque no weight against the barriers, whose interior slope would pull the current to zero.
-It is a pseudo-Huber rather than a square because the barrier is soft: a square's pull grows
-with the demand and a demand of 100 A (an outer loop that has lost tracking) pushed the current
-to 6.6 A against the 6 A limit; the bounded pull ``2 S delta`` (20 A^-1 by default) meets the
-barrier's slope (``2 P e lam^2 R K_m`` at the limit, 72 A^-1 on the elbow with R K_m = 5.3) near
-5.5 A however large the demand, while below the limits ``i - i*`` is a square as in Eq. 3.22.
-A barrier that starts acting early is the price: on the elbow, a demand of 5.3 A gives about
-4.5 A. ``torque_weight = 0`` with ``x*`` a position reference is the thesis's cost exactly
+``S rho(u - u*)`` (``torque_weight`` S, ``torque_scale`` delta; not in the thesis) is needed
+because over a 15 ms horizon a current hardly moves the position (about 4.3e-4 rad per A on the
+elbow at R K_m = 2.977 N m/A), so ``Q`` alone gives the torque no weight against the barriers,
+whose interior slope would pull the current to zero. It is a pseudo-Huber rather than a square
+because the barrier is soft: a square's pull grows with the demand (an outer loop that has lost
+tracking asks 100 A or more); the bounded pull ``2 S delta`` (30 A^-1 with S = 50, delta = 0.3 A)
+meets the barrier's slope (``2 P e lam^2 R K_m`` at the limit, 40.5 A^-1 on the elbow at 2.977,
+falling by e^-1 every 0.67 A below it) near 5.8 A however large the demand, while for
+``|i - i*| << delta`` it is a square as in Eq. 3.22. S is large so that the filter is transparent
+inside the limits (on the elbow at rest, a demand of 4.8 A, 80 % of i_max, gives 4.74 A; 4 A
+gives 3.98 A; with the former S = 1, delta = 10: 3.90 A and 3.51 A). The barrier stays soft and
+near a position limit its ``W_q`` term (exponent up to ``lam_q`` = 10) outweighs the current
+barrier's (``lam_tau R K_m`` per A): the entity clips its output current to ``±i_max`` and flags
+``saturated`` where the clip acts, the last line of defence. ``torque_weight = 0`` with ``x*`` a
+position reference is the thesis's cost exactly
 (:func:`solve` takes any ``x*``, ``u*``).
 
 **Solver** (Li and Todorov's iLQR, thesis §3.4.3, Eqs. 3.16-3.17), vectorised over joints
@@ -416,13 +421,15 @@ class TorqueProtection(dg.Entity):
     joint; default TALOS's elbow), ``q_min``, ``q_max`` (rad), ``q_dot_max`` (rad/s), ``i_max``
     (A; default each chain's), ``horizon``, ``knot_step`` (s), ``resolve_every`` (ticks), the
     weights ``Q_q``, ``Q_qd``, ``R``, ``W_q``, ``W_qd``, ``P`` and ``lam_q``, ``lam_qd``, ``lam_tau``
-    (thesis Eq. 3.23 and §3.4.5), ``torque_weight`` (S, ours: the weight of ``(i - i*)^2``),
+    (thesis Eq. 3.23 and §3.4.5), ``torque_weight`` (S, ours: the weight of the pseudo-Huber
+    ``rho(i - i*)``), ``torque_scale`` (its delta, A: quadratic below, pull bounded by ``2 S delta``),
     ``mu`` (Eq. 3.18), ``max_iterations``, ``tolerance`` (relative cost decrease that stops).
     Inputs: ``torque`` (commanded joint torque ``tau_j*``, N m), ``q``, ``q_dot`` (measured),
     ``q_ddot`` (the acceleration the controller commands, e.g. a whole-body QP's: ``i*`` delivers
     ``tau_j*`` at it; default NaN, per joint: the link model's ``(tau_j* - g(q) - tau_fj) / I_j``,
     which is wrong when the link carries a load the chain's ``M_X``, ``M_Y`` do not hold).
-    Outputs: ``current`` (the filtered ``i_m``, A), ``torque_out`` (the joint torque it delivers,
+    Outputs: ``current`` (the filtered ``i_m``, A, clipped to ``±i_max``), ``saturated`` (per joint:
+    the clip acted), ``torque_out`` (the joint torque it delivers,
     ``R K_m i - I_m q_ddot - tau_fm`` with the model's ``q_ddot``), ``reference_current``
     (``i*``, unfiltered), ``predicted_q``, ``predicted_q_dot`` (joints x knots+1, the plan),
     ``barriers`` (joints x 3: ``C_s`` of ``q``, ``q_dot``, ``tau_m`` now), ``solve_time`` (s of the
