@@ -26,10 +26,15 @@ from numpy.typing import ArrayLike
 import dgraph as dg
 from dgraph.params import MAX_SIZE
 
-ALPHA_CU = 3.93e-3
-"""Temperature coefficient of copper's resistance near 20 °C (1/K); the thesis gives no value."""
 T_IDLE = 43.0
 """The elbow motor's temperature when unused (°C): the drives heat it above the 26 °C room (§3.5.1)."""
+ALPHA_CU_20 = 3.93e-3
+"""Temperature coefficient of copper's resistance referred to 20 °C (1/K), the handbook value; the
+thesis gives none."""
+ALPHA_CU = ALPHA_CU_20 / (1.0 + ALPHA_CU_20 * (T_IDLE - 20.0))
+"""The same coefficient referred to ``T_A`` = 43 °C, where Eq. 3.6 takes ``R_TA`` (1/K): 3.604e-3. Copper's
+resistance is linear in T, ``R(T) = R_20 (1 + alpha_20 (T - 20))``, so referred to 43 °C its slope
+divides by ``1 + alpha_20 (43 - 20)``; using alpha_20 with ``R_TA`` at 43 °C overstates the rise by 9 %."""
 
 
 def thermal_step(T: np.ndarray, current: np.ndarray, dt: float, C_th: np.ndarray, R_th: np.ndarray,
@@ -76,8 +81,10 @@ class ThermalModel(dg.Entity):
     starts at ``T0`` (default ``T_A``).
 
     Defaults: ``T_A`` = 43 °C (the thesis's idle motor temperature: the drives heat it, §3.5.1),
-    ``alpha_Cu`` = 3.93e-3 /K. Gap-fillers (the thesis prints no values; its identified ``C_th``,
-    ``R_th`` are only in Fig. 3.3): ``R_TA`` = 0.6 Ω (winding resistance of a small 48 V
+    ``alpha_Cu`` = 3.604e-3 /K (copper's 3.93e-3 at 20 °C referred to 43 °C, ``R_TA``'s temperature:
+    :data:`ALPHA_CU`; give ``alpha_20 / (1 + alpha_20 (T_A - 20))`` with another ``T_A``).
+    Gap-fillers (the thesis prints no values; its identified ``C_th``, ``R_th`` are only in
+    Fig. 3.3): ``R_TA`` = 0.6 Ω (winding resistance of a small 48 V
     frameless brushless motor, the order of TALOS's arm motors), ``R_th`` = 1.5 K/W (winding to
     the drive's ambient), ``C_th`` = 400 J/K (a time constant ``R_th C_th`` = 600 s, the ten-minute
     scale of the heating run of Fig. 3.3), ``T_max`` = 100 °C (a casing-side limit well under
@@ -94,13 +101,15 @@ class ThermalModel(dg.Entity):
     R_th = dg.Param(1.5, kind="vector", minimum=1e-9, doc="thermal resistance winding to ambient, K/W (gap-filler)")
     R_TA = dg.Param(0.6, kind="vector", minimum=0.0, doc="winding resistance at T_A, Ohm (gap-filler)")
     T_A = dg.Param(T_IDLE, kind="vector", minimum=-273.15, doc="ambient of the motor, °C (thesis: 43 idle)")
-    alpha_Cu = dg.Param(ALPHA_CU, kind="vector", minimum=0.0, doc="copper resistance coefficient, 1/K")
+    alpha_Cu = dg.Param(ALPHA_CU, kind="vector", minimum=0.0, doc="copper resistance coefficient referred to T_A, "
+                        "1/K (default: 3.93e-3 at 20 °C referred to 43 °C)")
     T_max = dg.Param(100.0, kind="vector", minimum=-273.15, doc="temperature limit, °C (gap-filler)")
     T0 = dg.Param(None, kind="vector", minimum=-273.15, doc="initial temperature, °C (default: T_A)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
             self, name: str, *, size: int, C_th: ArrayLike = 400.0, R_th: ArrayLike = 1.5, R_TA: ArrayLike = 0.6,
-            T_A: ArrayLike = 43.0, alpha_Cu: ArrayLike = 0.00393, T_max: ArrayLike = 100.0, T0: ArrayLike | None = None,
+            T_A: ArrayLike = 43.0, alpha_Cu: ArrayLike = 0.003604215005640184, T_max: ArrayLike = 100.0,
+            T0: ArrayLike | None = None,
         ) -> None: ...
 
     current = dg.Input(shape=_n, doc="motor current i_m, A")
