@@ -14,7 +14,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 import dgraph as dg
-from dgraph.entities.actuators.chain import ChainFileError, ChainParameters, friction, load_chain_file
+from dgraph.entities.actuators.chain import (
+    ChainFileError,
+    ChainParameters,
+    desired_current,
+    friction,
+    load_chain_file,
+)
 from dgraph.entities.actuators.thermal_model import _n
 
 
@@ -129,8 +135,9 @@ class ActuatorModel(dg.Entity):
     @dg.output(shape=_n, depends=("tau_desired", "q_dot", "q_ddot"))
     def current_desired(self, t: int) -> np.ndarray:
         """``i_m* = (tau_j* + (I_m - a_c) q_ddot + tau_fm) / (R K_m)``, A (before saturation; ``a_c`` the
-        ``controller_armature``, already in ``tau_j*``)."""
-        return (self.tau_desired(t) + self._losses(t) - self._armature * self.q_ddot(t)) / self._R_Km
+        ``controller_armature``, already in ``tau_j*``; :func:`~dgraph.entities.actuators.chain.desired_current`)."""
+        return desired_current(self.chains, self.tau_desired(t), self.q_dot(t), self.q_ddot(t), self.smoothing,
+                               self.compensate_offsets, self._armature)
 
     @dg.output(shape=_n, depends=("current_desired",))
     def current(self, t: int) -> np.ndarray:

@@ -20,9 +20,11 @@ motor side's, the joint side's friction, ``R K_m`` and ``K_j``.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 GRAVITY = 9.81
 """g (m/s²), as in the chain's gravity torque ``g (M_Y sin q + M_X cos q)`` (shared by the actuator
@@ -76,13 +78,33 @@ class ChainParameters:
         return self.F_sm + self.F_sj
 
 
-def friction(viscous: float, dry: float, offset: float, velocity: np.ndarray | float,
+def friction(viscous: float | np.ndarray, dry: float | np.ndarray, offset: float | np.ndarray,
+             velocity: np.ndarray | float,
              smoothing: float | None = None) -> np.ndarray:
     """``F_v q_dot + F_s sign(q_dot) + off`` (Eq. 3.2); with ``smoothing`` = mu, ``sign`` is
     ``tanh(mu q_dot)`` (Eq. 3.18, mu = 1000 in the thesis's MPC)."""
     velocity = np.asarray(velocity, dtype=float)
     sign = np.sign(velocity) if smoothing is None else np.tanh(smoothing * velocity)
     return viscous * velocity + dry * sign + offset
+
+
+def desired_current(chains: Sequence[ChainParameters], torque: ArrayLike, q_dot: ArrayLike, q_ddot: ArrayLike,
+                    smoothing: float | None = None, compensate_offsets: bool = True,
+                    controller_armature: ArrayLike = 0.0) -> np.ndarray:
+    """``i_m* = (tau_j* + (I_m - a_c) q_ddot + tau_fm(q_dot)) / (R K_m)`` per joint (Eq. 3.1's two lines
+    subtracted, Eq. 3.3): the current whose motor torque delivers ``tau_j*`` to the joint, one value
+    per chain of ``chains``. ``tau_fm = F_vm q_dot + F_sm sign(q_dot) + off_m`` (:func:`friction`,
+    ``sign`` smoothed by ``smoothing``), without ``off_m`` if ``compensate_offsets`` is false (a plant
+    with no offset torque, MuJoCo's twin); ``a_c`` = ``controller_armature`` (scalar or per joint), the
+    rotor inertia the controller's model already puts in ``tau_j*`` (Pinocchio's armature). Shared by
+    :class:`~dgraph.entities.actuators.ActuatorModel` and
+    :class:`~dgraph.entities.actuators.TorqueProtection` (its reference ``u*``)."""
+    def col(name: str) -> np.ndarray:
+        return np.array([getattr(c, name) for c in chains], dtype=float)
+    offset = col("off_m") if compensate_offsets else np.zeros(len(chains))
+    tau_fm = friction(col("F_vm"), col("F_sm"), offset, q_dot, smoothing)
+    inertia = col("I_m") - np.asarray(controller_armature, dtype=float)
+    return (np.asarray(torque, dtype=float) + inertia * np.asarray(q_ddot, dtype=float) + tau_fm) / col("R_Km")
 
 
 TALOS_ELBOW = ChainParameters(M_X=-0.11, M_Y=1.1, I_j=0.33, I_m=0.45, F_vm=5.1, F_sm=4.0, off_m=0.86,

@@ -81,7 +81,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 import dgraph as dg
-from dgraph.entities.actuators.chain import GRAVITY, TALOS_ELBOW, ChainParameters, friction
+from dgraph.entities.actuators.chain import (
+    GRAVITY,
+    TALOS_ELBOW,
+    ChainFileError,
+    ChainParameters,
+    desired_current,
+    friction,
+    load_chain_file,
+)
 
 EXPONENT_CAP = 150.0
 """Barrier exponents are capped here (far beyond a limit) so that ``C_s^2`` stays finite."""
@@ -121,13 +129,14 @@ class Model:
     mu: float = 1000.0
 
     @classmethod
-    def from_chains(cls, chains: Sequence[ChainParameters], mu: float = 1000.0) -> Model:
-        """The model of the chains (one per joint)."""
+    def from_chains(cls, chains: Sequence[ChainParameters], mu: float = 1000.0, motor_offsets: bool = True) -> Model:
+        """The model of the chains (one per joint); without ``off_m`` if ``motor_offsets`` is false (a
+        plant with no motor-side offset, as ``compensate_offsets: false`` says)."""
         def col(f: Any) -> np.ndarray:
             return np.array([float(f(c)) for c in chains])
         return cls(col(lambda c: c.I_j + c.I_m), col(lambda c: c.F_v), col(lambda c: c.F_s),
-                   col(lambda c: c.off_m + c.off_j), col(lambda c: c.M_X), col(lambda c: c.M_Y),
-                   col(lambda c: c.R_Km), mu)
+                   col(lambda c: (c.off_m if motor_offsets else 0.0) + c.off_j), col(lambda c: c.M_X),
+                   col(lambda c: c.M_Y), col(lambda c: c.R_Km), mu)
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, u: np.ndarray) -> np.ndarray:
         """``q_ddot`` of Eq. 3.18."""
@@ -314,34 +323,39 @@ def solve(model: Model, lim: Limits, w: Weights, q0: np.ndarray, v0: np.ndarray,
 
 
 def reference(model: Model, chains: Sequence[ChainParameters], torque: np.ndarray, q: np.ndarray,
-              v: np.ndarray, n_knots: int, h: float,
-              acceleration: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              v: np.ndarray, n_knots: int, h: float, acceleration: np.ndarray | None = None,
+              compensate_offsets: bool = True,
+              controller_armature: ArrayLike = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``x*`` and ``u*`` from the commanded joint torque: the current that delivers ``tau_j*``
-    (motor side of Eq. 3.1 with the link's acceleration from its joint side, or ``acceleration``
-    where the controller gives it, i.e. where it is finite), held over the horizon, and the
-    model's trajectory under it."""
-    u_star = np.empty_like(torque)
+    (:func:`~dgraph.entities.actuators.chain.desired_current`, ActuatorModel's ``i_m*``, with
+    ``sign`` as ``tanh(mu q_dot)``, the link's acceleration from its joint side
+    ``(tau_j* - g(q) - tau_fj) / (I_j + a_c)``, or ``acceleration`` where the controller gives it, i.e.
+    where it is finite), held over the horizon, and the model's trajectory under it."""
+    armature = np.broadcast_to(np.asarray(controller_armature, dtype=float), torque.shape)
+    q_ddot = np.empty_like(torque)
     for j, c in enumerate(chains):
+        if acceleration is not None and np.isfinite(acceleration[j]):
+            q_ddot[j] = acceleration[j]
+            continue
         grav = GRAVITY * (c.M_Y * np.sin(q[j]) + c.M_X * np.cos(q[j]))
         tau_fj = friction(c.F_vj, c.F_sj, c.off_j, v[j], smoothing=model.mu)
-        tau_fm = friction(c.F_vm, c.F_sm, c.off_m, v[j], smoothing=model.mu)
-        if acceleration is not None and np.isfinite(acceleration[j]):
-            q_ddot = acceleration[j]
-        else:
-            q_ddot = (torque[j] - grav - tau_fj) / c.I_j if c.I_j > 0 else 0.0
-        u_star[j] = (torque[j] + c.I_m * q_ddot + tau_fm) / c.R_Km
+        link = c.I_j + armature[j]
+        q_ddot[j] = (torque[j] - grav - tau_fj) / link if link > 0 else 0.0
+    u_star = desired_current(chains, torque, v, q_ddot, model.mu, compensate_offsets, armature)
     u_ref = np.tile(u_star, (n_knots, 1))
     q_ref, v_ref = rollout(model, q, v, u_ref, h)
     return q_ref, v_ref, u_ref
 
 
 def delivered_torque(model: Model, chains: Sequence[ChainParameters], q: np.ndarray, v: np.ndarray,
-                     current: np.ndarray) -> np.ndarray:
-    """``tau_j = R K_m i_m - I_m q_ddot - tau_fm`` with ``q_ddot`` the model's (Eq. 3.18)."""
+                     current: np.ndarray, compensate_offsets: bool = True) -> np.ndarray:
+    """``tau_j = R K_m i_m - I_m q_ddot - tau_fm`` with ``q_ddot`` the model's (Eq. 3.18); ``tau_fm``
+    without ``off_m`` if ``compensate_offsets`` is false."""
     acc = model.acceleration(q, v, current)
     out = np.empty_like(current)
     for j, c in enumerate(chains):
-        out[j] = c.R_Km * current[j] - c.I_m * acc[j] - friction(c.F_vm, c.F_sm, c.off_m, v[j], smoothing=model.mu)
+        off_m = c.off_m if compensate_offsets else 0.0
+        out[j] = c.R_Km * current[j] - c.I_m * acc[j] - friction(c.F_vm, c.F_sm, off_m, v[j], smoothing=model.mu)
     return out
 
 
@@ -417,9 +431,17 @@ class TorqueProtection(dg.Entity):
     time with its feedback gain. The first solve starts from ``u*``; later ones from the previous
     plan shifted by the elapsed time.
 
-    Parameters: ``chains`` (a :class:`ChainParameters`, a list of them or of their dicts, one per
-    joint; default TALOS's elbow), ``q_min``, ``q_max`` (rad), ``q_dot_max`` (rad/s), ``i_max``
-    (A; default each chain's), ``horizon``, ``knot_step`` (s), ``resolve_every`` (ticks), the
+    Parameters: the chains, either ``path`` (an actuator parameter file,
+    :func:`~dgraph.entities.actuators.chain.load_chain_file`, as ActuatorModel's) with ``joints``
+    (names of its joints, one chain each), or ``chains`` (a :class:`ChainParameters`, a list of
+    them or of their dicts, one per joint; default TALOS's elbow); ``compensate_offsets`` and
+    ``controller_armature`` (``a_c``) as ActuatorModel's (the same
+    :func:`~dgraph.entities.actuators.chain.desired_current` gives ``i*``): ``off_m`` compensated
+    (default true; false for MuJoCo's twin, which has none: ``off_m`` then leaves ``i*``,
+    ``torque_out`` and the plan's model alike) and ``I_m - a_c`` compensated (default ``a_c`` 0; 0.1
+    under Pinocchio's TALOS model, whose armature is in ``tau_j*`` already); ``q_min``, ``q_max``
+    (rad), ``q_dot_max`` (rad/s), ``i_max`` (A; default each chain's), ``horizon``, ``knot_step``
+    (s), ``resolve_every`` (ticks), the
     weights ``Q_q``, ``Q_qd``, ``R``, ``W_q``, ``W_qd``, ``P`` and ``lam_q``, ``lam_qd``, ``lam_tau``
     (thesis Eq. 3.23 and §3.4.5), ``torque_weight`` (S, ours: the weight of the pseudo-Huber
     ``rho(i - i*)``), ``torque_scale`` (its delta, A: quadratic below, pull bounded by ``2 S delta``),
@@ -429,14 +451,23 @@ class TorqueProtection(dg.Entity):
     ``tau_j*`` at it; default NaN, per joint: the link model's ``(tau_j* - g(q) - tau_fj) / I_j``,
     which is wrong when the link carries a load the chain's ``M_X``, ``M_Y`` do not hold).
     Outputs: ``current`` (the filtered ``i_m``, A, clipped to ``±i_max``), ``saturated`` (per joint:
-    the clip acted), ``torque_out`` (the joint torque it delivers,
+    the clip acted), ``motor_torque`` (``R K_m i``, N m), ``torque_out`` (the joint torque it delivers,
     ``R K_m i - I_m q_ddot - tau_fm`` with the model's ``q_ddot``), ``reference_current``
     (``i*``, unfiltered), ``predicted_q``, ``predicted_q_dot`` (joints x knots+1, the plan),
     ``barriers`` (joints x 3: ``C_s`` of ``q``, ``q_dot``, ``tau_m`` now), ``solve_time`` (s of the
     last solve), ``iterations`` (of the last solve).
     """
 
-    chains = dg.Param(None, kind="object", doc="ChainParameters (or a list, one per joint); default TALOS_ELBOW")
+    chains = dg.Param(None, kind="object", doc="ChainParameters (or a list, one per joint); default TALOS_ELBOW "
+                      "unless path is given")
+    path = dg.Param(None, kind="path", doc="actuator parameter file (YAML, load_chain_file; in a graph file, "
+                    "relative to its folder), with joints; instead of chains")
+    joints = dg.Param(None, kind="str_list", doc="names of the joints of path driven, one chain each")
+    compensate_offsets = dg.Param(True, kind="bool", doc="compensate off_m in i* (a real chain); false for MuJoCo's "
+                                  "twin, which has no offset torque")
+    controller_armature = dg.Param(0.0, kind="vector", minimum=0.0, doc="rotor inertia the controller's model has at "
+                                   "each joint, kg m² (Pinocchio's armature: in tau_j* already); I_m minus it is "
+                                   "compensated in i*. Scalar or one per joint")
     q_min = dg.Param(-2.35619449019, kind="vector", doc="lower position limit (rad)")
     q_max = dg.Param(0.0, kind="vector", doc="upper position limit (rad)")
     q_dot_max = dg.Param(4.58, kind="vector", minimum=0.0, doc="velocity limit (rad/s)")
@@ -462,8 +493,9 @@ class TorqueProtection(dg.Entity):
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, chains: Any = None, q_min: ArrayLike = -2.35619449019, q_max: ArrayLike = 0.0,
-            q_dot_max: ArrayLike = 4.58, i_max: ArrayLike | None = None, horizon: float = 0.015,
+            self, name: str, *, chains: Any = None, path: str | None = None, joints: Sequence[str] | None = None,
+            compensate_offsets: bool = True, controller_armature: ArrayLike = 0.0, q_min: ArrayLike = -2.35619449019,
+            q_max: ArrayLike = 0.0, q_dot_max: ArrayLike = 4.58, i_max: ArrayLike | None = None, horizon: float = 0.015,
             knot_step: float = 0.003, resolve_every: int = 1, Q_q: float = 40.0, Q_qd: float = 0.01, R: float = 0.0001,
             W_q: float = 1.0, W_qd: float = 0.1, P: float = 10.0, lam_q: float = 10.0, lam_qd: float = 1.0,
             lam_tau: float = 0.5, torque_weight: float = 50.0, torque_scale: float = 0.3, mu: float = 1000.0,
@@ -479,9 +511,10 @@ class TorqueProtection(dg.Entity):
     def configure(self) -> None:
         """The chains, limits and weights from the parameters (checked), before the ports are sized."""
         name = self.name
-        self._chains = _chain_list(self.params.get("chains"), name)
+        self._chains = self._read_chains()
         n = len(self._chains)
-        self._model = Model.from_chains(self._chains, self.mu)
+        self._armature = _param_vector(self.controller_armature, n, "controller_armature", name)
+        self._model = Model.from_chains(self._chains, self.mu, self.compensate_offsets)
         i_max = self.i_max if self.i_max is not None else [c.i_max for c in self._chains]
         self._limits = Limits(_param_vector(self.q_min, n, "q_min", name), _param_vector(self.q_max, n, "q_max", name),
                               _param_vector(self.q_dot_max, n, "q_dot_max", name),
@@ -505,6 +538,30 @@ class TorqueProtection(dg.Entity):
         self.declare("q_ddot", dg.Input(shape=(n,), default=np.full(n, np.nan), finite=None,
                                         doc="joint acceleration the controller commands (rad/s²), for i*; NaN "
                                         "(default, per joint): the link model's"))
+
+    def _read_chains(self) -> list[ChainParameters]:
+        """One chain per joint: ``path`` and ``joints``, or ``chains``."""
+        name = self.name
+        if self.path is None:
+            if self.joints is not None:
+                raise dg.ParamError(f"{name}: parameter 'joints' needs 'path' (the file of their chains)", entity=name)
+            return _chain_list(self.params.get("chains"), name)
+        if self.params.get("chains") is not None:
+            raise dg.ParamError(f"{name}: parameters 'path' and 'chains' both given: one source of chains",
+                                entity=name)
+        if not self.joints:
+            raise dg.ParamError(f"{name}: parameter 'joints': at least one joint of {self.path}", entity=name)
+        if len(set(self.joints)) != len(self.joints):
+            raise dg.ParamError(f"{name}: parameter 'joints': a joint is named twice", entity=name)
+        try:
+            chains = load_chain_file(self.path)
+        except ChainFileError as exc:
+            raise dg.ParamError(f"{name}: parameter 'path': {exc}", entity=name) from None
+        missing = [j for j in self.joints if j not in chains]
+        if missing:
+            raise dg.ParamError(f"{name}: parameter 'joints': {missing} not in {self.path} (it has {sorted(chains)})",
+                                entity=name)
+        return [chains[j] for j in self.joints]
 
     def reset(self) -> None:
         """No plan yet (the first solve starts from ``i*``)."""
@@ -538,7 +595,7 @@ class TorqueProtection(dg.Entity):
             return self._plan
         q, v = self.q(t), self.q_dot(t)
         q_ref, v_ref, u_ref = reference(self._model, self._chains, self.torque(t), q, v, self._knots, self.knot_step,
-                                        self.q_ddot(t))
+                                        self.q_ddot(t), self.compensate_offsets, self._armature)
         elapsed = (t - self._plan_tick) * self.dt
         start = time.perf_counter()
         sol = solve(self._model, self._limits, self._weights, q, v, q_ref, v_ref, u_ref,
@@ -570,13 +627,19 @@ class TorqueProtection(dg.Entity):
     @dg.output(shape=_n, depends=("current", "q", "q_dot"))
     def torque_out(self, t: int) -> np.ndarray:
         """The joint torque the filtered current delivers (model's ``q_ddot``)."""
-        return delivered_torque(self._model, self._chains, self.q(t), self.q_dot(t), self.current(t))
+        return delivered_torque(self._model, self._chains, self.q(t), self.q_dot(t), self.current(t),
+                                self.compensate_offsets)
+
+    @dg.output(shape=_n, depends=("current",))
+    def motor_torque(self, t: int) -> np.ndarray:
+        """``tau_m = R K_m i`` (Eq. 3.3) of the filtered current, N m: what drives MuJoCo's twin."""
+        return self._model.R_Km * self.current(t)
 
     @dg.output(shape=_n, depends=("torque", "q", "q_dot", "q_ddot"))
     def reference_current(self, t: int) -> np.ndarray:
         """``i*``: the current that delivers the commanded torque (unfiltered)."""
         return reference(self._model, self._chains, self.torque(t), self.q(t), self.q_dot(t), 1, self.knot_step,
-                         self.q_ddot(t))[2][0]
+                         self.q_ddot(t), self.compensate_offsets, self._armature)[2][0]
 
     @dg.output(shape=_plan_shape, depends=("plan",))
     def predicted_q(self, t: int) -> np.ndarray:

@@ -3,12 +3,21 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 import dgraph as dg
-from dgraph.entities.actuators.chain import GRAVITY, TALOS_ELBOW, TALOS_ELBOW_R_KM, ChainParameters
+from dgraph.entities.actuators.actuator_model import ActuatorModel
+from dgraph.entities.actuators.chain import (
+    GRAVITY,
+    TALOS_ELBOW,
+    TALOS_ELBOW_R_KM,
+    ChainParameters,
+    load_chain_file,
+)
 from dgraph.entities.actuators.protection import (
     Limits,
     Model,
@@ -205,3 +214,73 @@ def test_a_failed_line_search_does_not_stop_the_ilqr() -> None:
     assert full.iterations > 1
     assert np.all(full.cost < 0.95 * one.cost), (full.cost, one.cost)
     assert full.capped.shape == (3,) and full.capped.dtype == bool
+
+
+FILE = Path(__file__).parents[3] / "graphs" / "data" / "talos_actuators.yaml"
+
+
+def at_rest_demand(q_ddot: float, torque: float = 12.0, **params: Any) -> tuple[float, float]:
+    """``i*`` of TorqueProtection and ``i_m*`` of ActuatorModel (tanh friction as the protection's)
+    for the same knobs, the elbow at rest at -1 rad with the commanded acceleration ``q_ddot``."""
+    protection = TorqueProtection("protection", path=str(FILE), joints=["arm_left_4_joint"], dt=0.001, **params)
+    protection.torque.set(np.array([torque]))
+    protection.q.set(np.array([-1.0]))
+    protection.q_dot.set(np.zeros(1))
+    protection.q_ddot.set(np.array([q_ddot]))
+    chain = ActuatorModel("chain", joints=["arm_left_4_joint"], path=str(FILE), smoothing=1000.0, **params)
+    chain.tau_desired.set(np.array([torque]))
+    chain.q_dot.set(np.zeros(1))
+    chain.q_ddot.set(np.array([q_ddot]))
+    return float(protection.reference_current(0)[0]), float(chain.current_desired(0)[0])
+
+
+def test_compensate_offsets_false_drops_off_m_from_the_demand_as_the_actuator_model_does() -> None:
+    with_offset, model_with = at_rest_demand(0.0)
+    without, model_without = at_rest_demand(0.0, compensate_offsets=False)
+    assert with_offset == pytest.approx((12.0 + ELBOW.off_m) / R_KM, rel=1e-12)  # tanh(0) = 0: only off_m
+    assert without == pytest.approx(12.0 / R_KM, rel=1e-12)
+    assert (with_offset, without) == pytest.approx((model_with, model_without), rel=1e-12)
+
+
+def test_controller_armature_is_taken_off_the_rotor_inertia_in_the_demand_as_the_actuator_model_does() -> None:
+    full, model_full = at_rest_demand(2.0, compensate_offsets=False)
+    reduced, model_reduced = at_rest_demand(2.0, compensate_offsets=False, controller_armature=0.1)
+    assert full == pytest.approx((12.0 + ELBOW.I_m * 2.0) / R_KM, rel=1e-12)
+    assert reduced == pytest.approx((12.0 + (ELBOW.I_m - 0.1) * 2.0) / R_KM, rel=1e-12)
+    assert (full, reduced) == pytest.approx((model_full, model_reduced), rel=1e-12)
+
+
+def test_the_link_models_acceleration_counts_the_controller_armature_in_the_link_inertia() -> None:
+    protection = TorqueProtection("protection", chains=[ELBOW], controller_armature=0.1, dt=0.001)
+    protection.torque.set(np.array([12.0]))
+    protection.q.set(np.array([-1.0]))
+    protection.q_dot.set(np.zeros(1))
+    gravity = GRAVITY * (ELBOW.M_Y * np.sin(-1.0) + ELBOW.M_X * np.cos(-1.0))
+    q_ddot = (12.0 - gravity - ELBOW.off_j) / (ELBOW.I_j + 0.1)
+    assert protection.reference_current(0)[0] == pytest.approx(
+        (12.0 + (ELBOW.I_m - 0.1) * q_ddot + ELBOW.off_m) / R_KM, rel=1e-12)
+
+
+def test_the_chains_can_come_from_the_actuator_file() -> None:
+    chains = load_chain_file(FILE)
+    protection = TorqueProtection("protection", path=str(FILE), joints=["arm_right_4_joint", "arm_left_4_joint"],
+                                  dt=0.001)
+    assert protection.size == 2
+    np.testing.assert_array_equal(protection._model.R_Km, [chains["arm_right_4_joint"].R_Km,
+                                                           chains["arm_left_4_joint"].R_Km])
+    protection.torque.set(np.array([5.0, -5.0]))
+    protection.q.set(np.array([-1.0, -1.0]))
+    protection.q_dot.set(np.zeros(2))
+    np.testing.assert_allclose(protection.motor_torque(0), R_KM * protection.current(0), rtol=1e-15)
+
+
+@pytest.mark.parametrize(("params", "match"), [
+    ({"joints": ["arm_left_4_joint"]}, "needs 'path'"),
+    ({"path": str(FILE), "joints": ["arm_left_4_joint"], "chains": [ELBOW]}, "both given"),
+    ({"path": str(FILE), "joints": ["arm_left_3_joint"]}, "not in"),
+    ({"path": str(FILE)}, "joints"),
+    ({"path": "/nonexistent.yaml", "joints": ["arm_left_4_joint"]}, "path"),
+])
+def test_bad_file_parameters_raise_a_param_error(params: dict, match: str) -> None:
+    with pytest.raises(dg.ParamError, match=f"prot: .*{match}"):
+        TorqueProtection("prot", dt=0.001, **params)
