@@ -64,9 +64,10 @@ def _na(entity: MujocoDevice) -> tuple[int]:
     return (entity.na,)
 
 
-def _port_name(body: str) -> str:
-    """``wrench_<body>`` with every character that is not a letter, digit or ``_`` replaced by ``_``."""
-    return "wrench_" + "".join(c if c.isalnum() or c == "_" else "_" for c in body)
+def _port_name(body: str, prefix: str = "wrench_") -> str:
+    """``<prefix><body>`` (``wrench_<body>``) with every character that is not a letter, digit or
+    ``_`` replaced by ``_``."""
+    return prefix + "".join(c if c.isalnum() or c == "_" else "_" for c in body)
 
 
 @dg.register
@@ -100,7 +101,8 @@ class MujocoDevice(dg.Device):
 
     Inputs: ``control`` (na), in position mode ``feedforward_torque`` and ``velocity_reference``
     (na, default zeros), ``wrench_<body>`` (6, world frame, at the body's CoM) for each of
-    ``wrench_bodies``. States: ``q``, ``v``, ``encoder_position``, ``encoder_velocity``,
+    ``wrench_bodies``, ``remove_<body>`` (bool) for each of ``remove_on``. States: ``q``, ``v``,
+    ``encoder_position``, ``encoder_velocity``,
     ``joint_torque``, ``contact_force_total``, ``sim_time``, ``control_fault``; a robot with an IMU
     (TALOS) adds ``imu_orientation``, ``imu_angular_velocity``, ``imu_linear_acceleration``; one
     with force/torque sensors ``ft_<sensor>`` for each (TALOS: ``ft_left_ankle``,
@@ -170,6 +172,8 @@ class MujocoDevice(dg.Device):
     wrench_bodies = dg.Param([], kind="str_list", doc="bodies getting a wrench_<body> input (world frame, at CoM)")
     remove_bodies = dg.Param([], kind="str_list", doc="scene mocap bodies removed during the run (unannounced)")
     remove_times = dg.Param([], kind="vector", doc="time (s) at which each of remove_bodies is removed")
+    remove_on = dg.Param([], kind="str_list", doc="scene mocap bodies getting a remove_<body> input (bool): "
+                         "removed, for the rest of the run, at the first tick it is true (an event of the run)")
     fall_height = dg.Param(None, kind="float", doc="base height (m) under which fallen is true (default: the "
                            "robot's, TALOS 0.6; a floating base only)")
     viewer = dg.Param(False, kind="bool", doc="show the simulation in an interactive MuJoCo window (needs a display)")
@@ -191,16 +195,17 @@ class MujocoDevice(dg.Device):
             collisions: Literal["feet", "all"] = "all", control_mode: Literal["torque", "position"] = "torque",
             kp: ArrayLike | None = None, kd: ArrayLike | None = None, q0: ArrayLike | None = None,
             v0: ArrayLike | None = None, dt: float | None = None, wrench_bodies: Sequence[str] = (),
-            remove_bodies: Sequence[str] = (), remove_times: ArrayLike = (), fall_height: float | None = None,
-            viewer: bool = False, viewer_fps: float = 30.0, stop_on_fall: bool = False, video_path: str | None = None,
-            video_fps: float = 25.0, video_start: float = 0.0, video_size: Sequence[int] = (320, 240),
+            remove_bodies: Sequence[str] = (), remove_times: ArrayLike = (), remove_on: Sequence[str] = (),
+            fall_height: float | None = None, viewer: bool = False, viewer_fps: float = 30.0,
+            stop_on_fall: bool = False, video_path: str | None = None, video_fps: float = 25.0,
+            video_start: float = 0.0, video_size: Sequence[int] = (320, 240),
             video_camera: Literal["robot", "track", "front"] = "robot",
         ) -> None: ...
 
     control = dg.Input(shape=_na, doc="joint torques (torque mode) or position targets (position mode)")
     # declared per instance (their zero default is sized by the robot): in position mode only,
     # feedforward_torque (na, added torque) and velocity_reference (na, joint velocity
-    # reference); and wrench_<body> (6) for each of wrench_bodies
+    # reference); wrench_<body> (6) for each of wrench_bodies; remove_<body> (bool) for each of remove_on
 
     q = dg.State(shape=("nq",), doc="configuration (Pinocchio: base position, quaternion xyzw, joints)")
     v = dg.State(shape=("nv",), doc="velocity (Pinocchio: base linear and angular in the base frame, joints)")
@@ -272,6 +277,12 @@ class MujocoDevice(dg.Device):
             self.declare(port, dg.Input(shape=(6,), default=np.zeros(6),
                                         doc=f"world-frame [force, torque] applied at the CoM of {body}"))
             self._wrenches.append((body_id, port))
+        self._remove_ports = [_port_name(body, "remove_") for body in self.remove_on]
+        if len(set(self._remove_ports)) != len(self._remove_ports):
+            raise dg.ParamError(f"{self.name}: two remove_on bodies map to the same input", entity=self.name)
+        for body, port in zip(self.remove_on, self._remove_ports, strict=True):
+            self.declare(port, dg.Input(shape=(), dtype="bool", default=False,
+                                        doc=f"removes the scene body {body} when true (latched until reset)"))
 
     def _declare_sensors(self, robot: RobotInfo) -> None:
         """The states of the robot's sensors (IMU, force/torque) and of its fall detection, if it has them."""
@@ -300,8 +311,8 @@ class MujocoDevice(dg.Device):
         m = self.mj_model
         self.data = mujoco.MjData(m)
         try:
-            self._removals = Removals(m, self.remove_bodies, np.atleast_1d(self.remove_times)) \
-                if self.remove_bodies or np.size(self.remove_times) else None
+            self._removals = Removals(m, self.remove_bodies, np.atleast_1d(self.remove_times), self.remove_on) \
+                if self.remove_bodies or np.size(self.remove_times) or self.remove_on else None
         except ValueError as exc:
             raise dg.ParamError(f"{self.name}: {exc}", entity=self.name) from None
         self._saved = np.zeros(mujoco.mj_stateSize(m, _STATE))
@@ -408,6 +419,12 @@ class MujocoDevice(dg.Device):
         jm.qpos_from_q(q0, d.qpos)
         jm.qvel_from_v(q0, v0, d.qvel)
         mujoco.mj_forward(m, d)
+        # cfrc_ext (contact_force_total) is filled by MuJoCo only for an acceleration-stage sensor
+        # that needs it (force, torque, accelerometer...: TALOS's F/T sensors and IMU); without one
+        # (an arm from a URDF) the device calls mj_rnePostConstraint itself after each step
+        self._rne_post_constraint = not d.flg_rnepost
+        if self._rne_post_constraint:
+            mujoco.mj_rnePostConstraint(m, d)
         self._pending = False
         self._sync_warnings()
         self._stage_all(self._contact_force(), everything=True)
@@ -471,7 +488,7 @@ class MujocoDevice(dg.Device):
         mujoco.mj_getState(m, d, self._saved, _STATE)
         self._pending = True
         if self._removals is not None:
-            self._removals.apply(d, t * dt)
+            self._removals.apply(d, t * dt, [bool(self.signal(port)(t)) for port in self._remove_ports])
         if tau is not None:  # else (torque mode, command replaced) ctrl holds the last valid one
             if self._ctrl_identity:
                 self._ctrl[:] = tau
@@ -480,6 +497,8 @@ class MujocoDevice(dg.Device):
         for body, wrench in wrenches:
             self._xfrc[body] = wrench
         mujoco.mj_step2(m, d)
+        if self._rne_post_constraint:  # cfrc_ext: the contact forces of this step (efc_force, contact frames)
+            mujoco.mj_rnePostConstraint(m, d)
         contact_force = self._contact_force()  # contact forces of this step: read before mj_step1
         mujoco.mj_step1(m, d)
         self._check(t)
@@ -578,8 +597,9 @@ class MujocoDevice(dg.Device):
     def _contact_force(self) -> np.ndarray:
         """Sum of the contact forces the scene exerts on the robot, world frame (valid after ``mj_step2``).
 
-        ``cfrc_ext`` (computed by MuJoCo for the force/torque sensors) holds, per body, the external
-        force in the world frame: contacts plus ``xfrc_applied``; the applied part is removed.
+        ``cfrc_ext`` (computed by MuJoCo for the force/torque sensors, else by the device's own
+        ``mj_rnePostConstraint``) holds, per body, the external force in the world frame: contacts
+        plus ``xfrc_applied``; the applied part is removed.
         """
         total = self._ones @ self._cfrc_robot
         if self._wrenches:

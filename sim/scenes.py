@@ -225,14 +225,10 @@ def drill(scene: Scene) -> None:
     """A Panda holding a 15 cm angle tool (a cylinder along the hand's x axis, radius 6 mm) in front of
     a vertical wall (front face ``x = 0.65`` m, 0.8 x 0.5 m, 2 cm thick, centred at ``y = 0``, ``z = 0.45`` m); the
     wall around hole :data:`DRILL_BREAKTHROUGH` is a 3 cm square plate, the mocap body ``wall_plate``,
-    that a simulation removes to break the hole through (thesis Ch. 6 drilling, Table 6.2)."""
+    that a simulation removes to break the hole through (thesis Ch. 6 drilling, Table 6.2). No sensor:
+    the device measures the contact force itself (``contact_force_total``)."""
     scene.floor(friction=1.0)
     scene.tool("panda_hand", start=(0.0, 0.0, 0.06), end=DRILL_TOOL_TIP, radius=0.006)
-    # a force sensor at the tool tip: with it MuJoCo computes the bodies' external forces
-    # (mj_rnePostConstraint), which the device's contact_force_total reads; without any such
-    # sensor (an arm has none) they stay zero
-    scene.spec.add_sensor(name="tool_force", type=mujoco.mjtSensor.mjSENS_FORCE, objtype=mujoco.mjtObj.mjOBJ_SITE,
-                          objname="tool_tip")
     _, y, z = DRILL_HOLES[DRILL_BREAKTHROUGH]
     scene.wall("wall", DRILL_WALL_X, center=(0.0, 0.45), size=(0.8, 0.5), window=(y, z, 0.03))
 

@@ -158,3 +158,17 @@ def test_two_tool_frames_and_the_shared_model_is_untouched():
     gripper = data.oMf[model.getFrameId("gripper_left_base_link")]
     np.testing.assert_allclose(data.oMf[model.getFrameId("b")].translation, gripper.act(np.array([0.1, 0.0, -0.2])),
                                atol=1e-12)
+
+
+def test_a_triggered_removal_happens_when_its_flag_fires_and_stays():
+    m, d = ball_on_a_mocap_block()
+    removals = Removals(m, [], [], triggered=["block"])
+    start = d.mocap_pos[0].copy()
+    removals.apply(d, 5.0, [False])
+    np.testing.assert_array_equal(d.mocap_pos[0], start)
+    removals.apply(d, 5.0, [True])
+    np.testing.assert_array_equal(d.mocap_pos[0], AWAY)
+    removals.apply(d, 6.0, [False])  # latched: nothing brings it back
+    np.testing.assert_array_equal(d.mocap_pos[0], AWAY)
+    with pytest.raises(ValueError, match="not a mocap body"):
+        Removals(m, [], [], triggered=["ball"])

@@ -443,3 +443,46 @@ def test_position_mode_inputs_exist_only_in_position_mode():
     with pytest.raises(dg.DGraphError, match="has no signal 'feedforward_torque'"):
         torque.signal("feedforward_torque")
     assert "feedforward_torque" in MujocoDevice("device", control_mode="position").inputs
+
+
+class _Counted:
+    """``mujoco.mj_rnePostConstraint``, counting its calls."""
+
+    def __init__(self, function):
+        self.function, self.calls = function, 0
+
+    def __call__(self, m, d):
+        self.calls += 1
+        return self.function(m, d)
+
+
+def test_an_arm_without_any_sensor_measures_its_contact_force(monkeypatch):
+    """The Panda (a URDF arm: no sensor at all) presses its drill tool on the wall: MuJoCo fills
+    cfrc_ext only for an acceleration-stage sensor, so the device computes it itself each step."""
+    from pathlib import Path
+
+    from dgraph.entities.references.drilling import RAMP
+
+    counted = _Counted(mujoco.mj_rnePostConstraint)
+    monkeypatch.setattr(mujoco, "mj_rnePostConstraint", counted)
+    graph = dg.load(str(Path(__file__).resolve().parents[2] / "graphs" / "panda_drill.yaml"), {"recorder.rerun": "off"})
+    with graph:
+        assert graph["device"].mj_model.nsensor == 0
+        graph.run(duration=1.2, progress=False)
+        data = graph["recorder"].data()
+    assert counted.calls == 1 + 1200  # the reset, then every step
+    force = data["device.contact_force_total"]
+    assert (data["sequence.phase"] == RAMP).any()  # the approach ended on the measured force (>= 3 N)
+    pressing = -force[:, 0] > 5.0
+    assert pressing.sum() > 100
+    # the wall pushes back along -x, its friction (mu 0.5, a pyramid) within the cone
+    assert (np.abs(force[pressing, 1:]) <= 0.5 * -force[pressing, 0:1] + 1e-3).all()
+
+
+def test_talos_has_acceleration_stage_sensors_and_no_extra_call(monkeypatch):
+    counted = _Counted(mujoco.mj_rnePostConstraint)
+    monkeypatch.setattr(mujoco, "mj_rnePostConstraint", counted)
+    g, dev = standing_graph()
+    g.run(duration=0.05)
+    assert not dev._rne_post_constraint and counted.calls == 0
+    assert dev.contact_force_total.value[2] > 0.9 * mass(dev, "base_link") * G  # MuJoCo's own, for the F/T sensors
