@@ -191,7 +191,7 @@ class MujocoDevice(dg.Device):
         def __init__(
             self, name: str, *, model: str | Any = "talos", package_dirs: Sequence[str] = (), mjcf: str | None = None,
             mjcf_tolerance: float = 0.01, actuators: str | None = None,
-            scene: Literal["flat", "block", "stairs", "slope", "push", "drill"] = "flat",
+            scene: Literal["flat", "block", "stairs", "slope", "push", "drill", "talos_wall"] = "flat",
             collisions: Literal["feet", "all"] = "all", control_mode: Literal["torque", "position"] = "torque",
             kp: ArrayLike | None = None, kd: ArrayLike | None = None, q0: ArrayLike | None = None,
             v0: ArrayLike | None = None, dt: float | None = None, wrench_bodies: Sequence[str] = (),

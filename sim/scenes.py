@@ -233,8 +233,25 @@ def drill(scene: Scene) -> None:
     scene.wall("wall", DRILL_WALL_X, center=(0.0, 0.45), size=(0.8, 0.5), window=(y, z, 0.03))
 
 
+TALOS_WALL_X = 0.46
+"""Front face of the ``talos_wall`` scene's wall: the plane ``x = 0.46`` m (normal -x), 1 cm in
+front of the ``push`` tool's tip in ``graphs/talos_wall_push.yaml``'s initial configuration (the
+tool horizontal along +x at ``(0.45, 0.35, 1.10)``)."""
+
+
+def talos_wall(scene: Scene) -> None:
+    """TALOS's left hand holds the ``push`` scene's tool (:data:`LEFT_TOOL_TIP`) in front of a static
+    vertical wall (front face ``x = 0.46`` m, 0.3 x 0.3 m, 2 cm thick, centred at ``y = 0.35``,
+    ``z = 1.10`` m) that the tool pushes along its axis (Scenario 2 of thesis Ch. 6: the standing
+    robot's largest normal force)."""
+    scene.floor(friction=1.0)
+    scene.tool("gripper_left_base_link", start=(0.0, 0.0, -0.06), end=LEFT_TOOL_TIP, radius=0.015)
+    scene.wall("wall", TALOS_WALL_X, center=(0.35, 1.10), size=(0.3, 0.3))
+
+
 SCENES: dict[str, Callable[[Scene], None]] = {"flat": flat, "block": block, "stairs": stairs, "slope": slope,
-                                              "push": push, "drill": drill}
+                                              "push": push, "drill": drill,
+                                              "talos_wall": talos_wall}
 """Scenes by name (the robot's light and tracking camera are added by :func:`add_scene`)."""
 
 
