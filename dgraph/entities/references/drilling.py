@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -59,15 +59,19 @@ class DrillingSequence(dg.Entity):
     breakthrough and moves on to the next hole (the thesis's "skip the failed hole, log it and
     continue", §6.4).
 
-    Without a loss and with every contact made at the end of its approach move, hole ``k``'s
-    hold starts at :meth:`hold_start` ``(k) = k T + move + approach + ramp``, ``T`` the sum of the
-    six durations; each contact made later delays the rest by as much.
+    **Breakthrough event** (for a simulation): ``breakthrough`` turns true ``break_delay`` s after
+    hole ``break_hole``'s phase ``break_phase`` (``"ramp"`` or ``"hold"``) began, while that phase
+    lasts: the material giving way after the drill has pushed for a while, an event of the
+    sequence rather than a wall-clock time (the phases' start times depend on when each contact is
+    made). A simulator removes the hole's patch of surface on it (``MujocoDevice``'s
+    ``remove_on``). The loss detection above does not read it: it sees the force vanish.
 
     Parameters: ``holes`` (n x 3, world, points on the surface), ``normal`` (3, world, from the
     surface towards the robot: the direction of the force on the robot), ``standoff``, ``depth``
     (m), ``force`` (``F*``), ``slip_force``, ``clamp_force``, ``contact_force``, ``loss_force``
     (N), the six durations, ``contact_time``, ``timeout`` and ``loss_time`` (s),
-    ``approach_weight`` (the pose task's weight outside contact), ``dt``.
+    ``approach_weight`` (the pose task's weight outside contact), ``break_hole`` (-1: none),
+    ``break_phase``, ``break_delay``, ``dt``.
     Inputs: ``tool_position`` (3, measured tool point, world), ``measured_force`` (3, force on the
     robot, world).
     States: ``phase``, ``hole`` (index into ``holes``; ``n`` when done), ``phase_tick`` (tick at which
@@ -76,7 +80,7 @@ class DrillingSequence(dg.Entity):
     (holes skipped).
     Outputs: ``position`` (3), ``velocity``, ``acceleration`` (6, ``[linear, 0]``: a FramePose's
     reference), ``pose_weight``, ``normal_force_reference`` (``f_n``, 0 outside contact),
-    ``force_reference`` (3), ``contact_active`` (bool).
+    ``force_reference`` (3), ``contact_active`` (bool), ``breakthrough`` (bool).
     """
 
     has_state = True
@@ -100,6 +104,12 @@ class DrillingSequence(dg.Entity):
     release = dg.Param(0.2, kind="float", minimum=1e-3, doc="duration of the force release (s)")
     retract = dg.Param(0.3, kind="float", minimum=1e-3, doc="duration of the retract (s)")
     approach_weight = dg.Param(1.0, kind="float", minimum=0.0, doc="pose task weight outside contact")
+    break_hole = dg.Param(-1, kind="int", minimum=-1, doc="hole whose surface gives way (breakthrough output; "
+                          "-1: none)")
+    break_phase = dg.Param("hold", kind="str", choices=("ramp", "hold"), doc="phase of break_hole in which it "
+                           "gives way")
+    break_delay = dg.Param(0.25, kind="float", minimum=0.0, doc="time after break_phase began at which it gives "
+                           "way (s)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
@@ -107,7 +117,8 @@ class DrillingSequence(dg.Entity):
             depth: float = 0.005, force: float = 20.0, slip_force: float = 5.0, clamp_force: float = 40.0,
             contact_force: float = 3.0, contact_time: float = 0.005, timeout: float = 1.0, loss_force: float = 2.0,
             loss_time: float = 0.005, move: float = 0.5, approach: float = 0.3, ramp: float = 0.3, hold: float = 0.5,
-            release: float = 0.2, retract: float = 0.3, approach_weight: float = 1.0, dt: float | None = None,
+            release: float = 0.2, retract: float = 0.3, approach_weight: float = 1.0, break_hole: int = -1,
+            break_phase: Literal["ramp", "hold"] = "hold", break_delay: float = 0.25, dt: float | None = None,
         ) -> None: ...
 
     tool_position = dg.Input(shape=(3,), doc="measured tool point (world, m)")
@@ -141,6 +152,10 @@ class DrillingSequence(dg.Entity):
             raise dg.ParamError(f"{self.name}: need loss_force < slip_force and contact_force <= slip_force",
                                 entity=self.name)
         self._durations = (self.move, self.approach, self.ramp, self.hold, self.release, self.retract)
+        self._break_phase = RAMP if self.break_phase == "ramp" else HOLD
+        if self.break_hole >= len(self._holes):
+            raise dg.ParamError(f"{self.name}: break_hole {self.break_hole} is not a hole (n = {len(self._holes)})",
+                                entity=self.name)
 
     def reset(self) -> None:
         """Back to the first move (its origin latched from ``tool_position`` at the first tick)."""
@@ -153,10 +168,6 @@ class DrillingSequence(dg.Entity):
     def n_holes(self) -> int:
         """Number of holes."""
         return len(self._holes)
-
-    def hold_start(self, hole: int) -> float:
-        """Time (s) at which ``hole``'s hold begins when no contact was lost before it."""
-        return hole * sum(self._durations) + self.move + self.approach + self.ramp
 
     def standoff_point(self, hole: int) -> np.ndarray:
         """``s_k = h_k + standoff n``."""
@@ -285,6 +296,12 @@ class DrillingSequence(dg.Entity):
         else:
             value = self.force - span * quintic(self._elapsed(t) / self.release)[0]
         return float(min(max(value, self.slip_force), self.clamp_force))
+
+    @dg.output(shape=(), dtype="bool", depends=("t", "phase", "hole", "phase_tick"))
+    def breakthrough(self, t: int) -> bool:
+        """True in hole ``break_hole``'s phase ``break_phase`` from ``break_delay`` s after it began."""
+        return (int(self.hole(t)) == self.break_hole and int(self.phase(t)) == self._break_phase
+                and self._elapsed(t) >= self.break_delay - 1e-6 * self.dt)
 
     @dg.output(shape=(3,), depends=("normal_force_reference",))
     def force_reference(self, t: int) -> np.ndarray:
