@@ -3,10 +3,13 @@
     .venv/bin/python bench/drilling.py [--plots docs]
 
 Runs ``graphs/panda_drill.yaml`` (passive QP, energy tank) and ``graphs/panda_drill_no_tank.yaml``
-to their end and prints, for each: the normal-force error per hole in the second half of its hold
-(mean and max of ``|f_n - F*|``), the peak force at contact and its overshoot over the reference,
-the breakthrough (how far the tool advanced into the hole, its peak speed, the time to retract),
-the tank's energy range and the largest ``H_dot - (-v_j^T tau)``. ``--plots DIR`` writes PNGs.
+to their end, and the tank graph with the breakthrough moved into hole 5's force ramp, and prints,
+for each: the normal-force error per hole in the second half of its hold (mean and max of
+``|f_n - F*|``), the peak force at contact and its overshoot over the reference, the largest
+measured force in the holds (against f_clamp), the breakthrough (the tool's 3-D displacement over
+the 50 ms after it, its peak speed, the time to retract), the position task's largest lag in the
+moves, the smallest tank scale gamma, the tank's energy range and the largest
+``H_dot - (-v_j^T tau)``. ``--plots DIR`` writes PNGs.
 ``initial_configuration()`` is how the graph's ``q0`` was computed.
 """
 
@@ -14,16 +17,23 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 import dgraph as dg
-from dgraph.entities.references.drilling import APPROACH, HOLD, RAMP, RETRACT
+from dgraph.entities.references.drilling import APPROACH, HOLD, MOVE, RAMP, RETRACT
+from dgraph_sim.scenes import DRILL_BREAKTHROUGH
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 ROOT = Path(__file__).resolve().parents[1]
 GRAPHS = ROOT / "graphs"
 TARGET = 20.0
-REMOVAL = 12.25
+CLAMP = 40.0
+LUNGE_WINDOW = 50  # ticks after the breakthrough
+RAMP_BREAK = {"sequence.break_phase": "ramp", "sequence.break_delay": 0.15}
 
 
 def initial_configuration(target: tuple[float, float, float] = (0.62, -0.18, 0.45)) -> np.ndarray:
@@ -58,23 +68,31 @@ def initial_configuration(target: tuple[float, float, float] = (0.62, -0.18, 0.4
     return np.round(q, 5)
 
 
-def scenario(name: str) -> dict[str, np.ndarray]:
+def scenario(name: str, overrides: dict[str, object] | None = None) -> dict[str, np.ndarray]:
     """Run a graph file to its end; the Recorder's data."""
-    graph = dg.load(str(GRAPHS / f"{name}.yaml"), {"recorder.rerun": "off"})
+    graph = dg.load(str(GRAPHS / f"{name}.yaml"), {"recorder.rerun": "off", **(overrides or {})})
     with graph:
         graph.run(duration=graph.duration, progress=False)
         return graph["recorder"].data()
 
 
+def removal(data: dict[str, np.ndarray]) -> int:
+    """The tick of the sequence's breakthrough event (the plate goes in the step from it)."""
+    return int(np.argmax(data["sequence.breakthrough"]))
+
+
 def outcomes(data: dict[str, np.ndarray]) -> dict[str, object]:
-    """Per-hole force errors, overshoots, breakthrough and tank figures of one run."""
+    """Per-hole force errors, overshoots, breakthrough, lag and tank figures of one run."""
     time, phase, hole = data["time"], data["sequence.phase"], data["sequence.hole"]
     force = -data["device.contact_force_total"][:, 0]
     reference = data["sequence.normal_force_reference"]
-    x = data["tool_contact.position"][:, 0]
+    tip = data["tool_contact.position"]
+    k_break = removal(data)
     mean_error, max_error, contact_peak, overshoot = [], [], [], []
     for k in np.unique(hole[phase == HOLD]):
-        held = np.flatnonzero((phase == HOLD) & (hole == k) & (time < REMOVAL if k == 5 else True))
+        held = np.flatnonzero((phase == HOLD) & (hole == k))
+        if k == DRILL_BREAKTHROUGH:  # the part before the breakthrough
+            held = held[held <= k_break]
         steady = held[len(held) // 2:]
         mean_error.append(float(np.abs(force[steady] - TARGET).mean()))
         max_error.append(float(np.abs(force[steady] - TARGET).max()))
@@ -82,16 +100,22 @@ def outcomes(data: dict[str, np.ndarray]) -> dict[str, object]:
         contact_peak.append(float(force[pressing].max()))
         ramp_hold = np.flatnonzero(((phase == RAMP) | (phase == HOLD)) & (hole == k))
         overshoot.append(float((force[ramp_hold] - reference[ramp_hold]).max()))
-    removal = int(np.argmax(time >= REMOVAL))
-    after = slice(removal, removal + 1000)
-    speed = np.abs(np.gradient(x[after], time[after]))
-    retract = removal + int(np.argmax(phase[removal:] == RETRACT))
+    after = slice(k_break, k_break + LUNGE_WINDOW + 1)
+    speed = np.linalg.norm(np.gradient(tip[after], time[after], axis=0), axis=1)
+    retract = k_break + int(np.argmax(phase[k_break:] == RETRACT))
+    moving = phase == MOVE
     return {
         "mean |f_n - F*| per hole (N)": mean_error, "max |f_n - F*| per hole (N)": max_error,
         "peak f_n approach-hold per hole (N)": contact_peak, "max f_n - f_n* ramp-hold per hole (N)": overshoot,
-        "breakthrough advance (mm)": 1000 * float(x[after].max() - x[removal - 1]),
-        "breakthrough peak tool speed (m/s)": float(speed.max()),
-        "loss seen after (ms)": 1000 * float(time[retract] - REMOVAL),
+        "max measured f_n in the holds (N)": float(force[phase == HOLD].max()),
+        "breakthrough at (s), hole, phase": (float(time[k_break]), int(hole[k_break]), int(phase[k_break])),
+        "breakthrough 3-D displacement, 50 ms (mm)":
+            1000 * float(np.linalg.norm(tip[after] - tip[k_break], axis=1).max()),
+        "breakthrough peak tool speed, 50 ms (m/s)": float(speed.max()),
+        "loss seen after (ms)": 1000 * float(time[retract] - time[k_break]),
+        "max position-task lag in the moves (mm)": 1000 * float(np.linalg.norm(data["tool.error"][moving][:, :3],
+                                                                                axis=1).max()),
+        "min tank gamma": float(data["tank.gamma"].min()),
         "E_tank min / max (J)": (float(data["tank.energy"].min()), float(data["tank.energy"].max())),
         "max H_dot - (-v_j^T tau) (W)": float((data["tank.power_bound"] - data["tank.delivered_power"]).max()),
         "QP failures": int((data["solver.status"] != 0).sum()),
@@ -99,7 +123,8 @@ def outcomes(data: dict[str, np.ndarray]) -> dict[str, object]:
     }
 
 
-def plot(tank: dict[str, np.ndarray], plain: dict[str, np.ndarray], folder: Path) -> list[Path]:
+def plot(tank: dict[str, np.ndarray], plain: dict[str, np.ndarray], ramp: dict[str, np.ndarray],
+         folder: Path) -> list[Path]:
     """Force tracking over the ten holes, a zoom on one hole and on the breakthrough, tank energy."""
     import matplotlib
 
@@ -111,7 +136,7 @@ def plot(tank: dict[str, np.ndarray], plain: dict[str, np.ndarray], folder: Path
     t = tank["time"]
     axes[0].plot(t, -tank["device.contact_force_total"][:, 0], label="measured f_n (tank)")
     axes[0].plot(t, tank["sequence.normal_force_reference"], "k--", lw=0.8, label="reference f_n*")
-    axes[0].axvline(REMOVAL, color="r", lw=0.8, label="hole 5 breaks through")
+    axes[0].axvline(tank["time"][removal(tank)], color="r", lw=0.8, label=f"hole {DRILL_BREAKTHROUGH} breaks through")
     axes[0].set_ylabel("normal force (N)")
     axes[0].legend(loc="upper right", fontsize=8)
     axes[1].plot(t, tank["tank.energy"], label="E_tank (tank)")
@@ -131,21 +156,23 @@ def plot(tank: dict[str, np.ndarray], plain: dict[str, np.ndarray], folder: Path
     axes[0].set_xlabel("time (s)")
     axes[0].set_ylabel("N")
     axes[0].legend(fontsize=8)
-    for data, label in ((tank, "tank"), (plain, "no tank")):
-        window = (data["time"] > REMOVAL - 0.05) & (data["time"] < REMOVAL + 0.4)
-        removal = int(np.argmax(data["time"] >= REMOVAL))
-        x = data["tool_contact.position"][:, 0]
-        axes[1].plot(data["time"][window], 1000 * (x[window] - x[removal - 1]), label=label)
-    axes[1].axvline(REMOVAL, color="r", lw=0.8)
-    axes[1].set_title("breakthrough: tool advance into the hole")
-    axes[1].set_xlabel("time (s)")
-    axes[1].set_ylabel("mm (+: into the wall)")
+    for data, label in ((tank, "tank, in the hold"), (plain, "no tank, in the hold"), (ramp, "tank, in the ramp")):
+        k = removal(data)
+        since = data["time"] - data["time"][k]
+        window = (since > -0.05) & (since < 0.4)
+        tip = data["tool_contact.position"]
+        axes[1].plot(1000 * since[window], 1000 * np.linalg.norm(tip[window] - tip[k], axis=1), label=label)
+    axes[1].axvline(0.0, color="r", lw=0.8)
+    axes[1].axvspan(0.0, LUNGE_WINDOW, color="r", alpha=0.08)
+    axes[1].set_title("breakthrough: tool displacement (3-D)")
+    axes[1].set_xlabel("time since the breakthrough (ms)")
+    axes[1].set_ylabel("mm")
     axes[1].legend(fontsize=8)
     paths.append(_save(fig, folder / "force_control_breakthrough.png"))
     return paths
 
 
-def _save(fig: object, path: Path) -> Path:
+def _save(fig: Figure, path: Path) -> Path:
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     return path
@@ -155,7 +182,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--plots", type=Path, default=None, help="folder for the PNG plots")
     args = parser.parse_args()
-    runs = {"tank": scenario("panda_drill"), "no tank": scenario("panda_drill_no_tank")}
+    runs = {"tank": scenario("panda_drill"), "no tank": scenario("panda_drill_no_tank"),
+            "tank, breakthrough in the ramp": scenario("panda_drill", RAMP_BREAK)}
     for label, data in runs.items():
         print(f"== {label}")
         for key, value in outcomes(data).items():
@@ -163,7 +191,7 @@ def main() -> None:
                 else f"{value:.4g}" if isinstance(value, float) else str(value)
             print(f"  {key}: {text}")
     if args.plots is not None:
-        for path in plot(runs["tank"], runs["no tank"], args.plots):
+        for path in plot(runs["tank"], runs["no tank"], runs["tank, breakthrough in the ramp"], args.plots):
             print("wrote", path)
 
 
