@@ -233,15 +233,15 @@ def drill(scene: Scene) -> None:
     scene.wall("wall", DRILL_WALL_X, center=(0.0, 0.45), size=(0.8, 0.5), window=(y, z, 0.03))
 
 
-TALOS_WALL_X = 0.46
-"""Front face of the ``talos_wall`` scene's wall: the plane ``x = 0.46`` m (normal -x), 1 cm in
+TALOS_WALL_X = 0.455
+"""Front face of the ``talos_wall`` scene's wall: the plane ``x = 0.455`` m (normal -x), 5 mm in
 front of the ``push`` tool's tip in ``graphs/talos_wall_push.yaml``'s initial configuration (the
 tool horizontal along +x at ``(0.45, 0.35, 1.10)``)."""
 
 
 def talos_wall(scene: Scene) -> None:
     """TALOS's left hand holds the ``push`` scene's tool (:data:`LEFT_TOOL_TIP`) in front of a static
-    vertical wall (front face ``x = 0.46`` m, 0.3 x 0.3 m, 2 cm thick, centred at ``y = 0.35``,
+    vertical wall (front face ``x = 0.455`` m, 0.3 x 0.3 m, 2 cm thick, centred at ``y = 0.35``,
     ``z = 1.10`` m) that the tool pushes along its axis (Scenario 2 of thesis Ch. 6: the standing
     robot's largest normal force)."""
     scene.floor(friction=1.0)
