@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import socket
+import subprocess
 
 import numpy as np
 import pytest
@@ -123,3 +124,14 @@ def ports() -> tuple[int, int]:
     for probe in probes:
         probe.close()
     return free
+
+
+def stop_process(process: subprocess.Popen, timeout: float = 10.0) -> None:
+    """End ``process`` if it still runs: SIGTERM, then SIGKILL if it has not ended ``timeout`` s later."""
+    if process.poll() is None:
+        process.terminate()
+        try:
+            process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()

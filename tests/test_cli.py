@@ -15,6 +15,7 @@ import pytest
 
 from dgraph.cli import main
 from dgraph.registry import entity_types
+from tests.conftest import stop_process
 
 ROOT = Path(__file__).resolve().parents[1]
 PD = str(ROOT / "graphs" / "pd_double_integrator.yaml")
@@ -244,13 +245,7 @@ def stop_cli(process: subprocess.Popen[bytes], grpc: int | None = None) -> None:
     """End ``process`` (a ``dgraph run``) if it still runs: SIGTERM first, which stops its Rerun
     servers, then SIGKILL if it has not ended 10 s later; close its pipes. With ``grpc``, also kill
     a Rerun server left serving on that port (what a failure of the code under test would leave)."""
-    if process.poll() is None:
-        process.terminate()
-        try:
-            process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
+    stop_process(process)
     for pipe in (process.stdout, process.stderr):
         if pipe is not None:
             pipe.close()

@@ -24,6 +24,7 @@ import pytest
 import dgraph as dg
 from dgraph_sim import viewer
 from dgraph_sim.device import MujocoDevice
+from tests.conftest import stop_process
 
 ROOT = Path(__file__).resolve().parents[2]
 PANDA = ROOT / "graphs" / "panda_reach.yaml"
@@ -80,12 +81,7 @@ def xvfb() -> Iterator[str]:
                 pytest.fail(f"Xvfb did not start: {log.read().decode(errors='replace')}")
             yield f":{number}"
         finally:
-            server.terminate()
-            try:
-                server.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                server.kill()
-                server.wait()
+            stop_process(server)
 
 
 # Run in a child process under the virtual display: panda_reach for 0.3 s without a window, with
