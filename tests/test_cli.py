@@ -489,14 +489,10 @@ def test_serve_keeps_serving_a_web_viewer_that_draws_the_recording_until_ctrl_c(
     through SwiftShader): its plot area shows the series' colours, which Rerun's welcome page (what
     the viewer shows without a recording) does not. Skipped only outside CI without Chromium; every
     wait has a deadline, and a failure stops the command with SIGTERM (which stops its server)."""
-    from tests.browser import Chromium, chromium_path, series_colours, wait_for_series
+    from tests.browser import Chromium, series_colours, wait_for_series
     from tests.entities.test_rerun_stream import listening
 
-    executable = chromium_path()
-    if executable is None:
-        if os.environ.get("CI"):
-            pytest.fail("CI is set and Chromium is missing: .ci/run installs it (apt-get install chromium)")
-        pytest.skip("Chromium is not installed (apt-get install chromium)")
+    executable = required_chromium()
     grpc, web = ports
     run = serve_and_keep(tmp_path, grpc, web)
     try:
@@ -528,14 +524,24 @@ def test_serve_keeps_serving_a_web_viewer_that_draws_the_recording_until_ctrl_c(
         stop_cli(run, grpc)
 
 
-def test_the_browser_gives_up_at_its_deadline():
-    """A DevTools command with no reply (a promise that never settles) raises after ``timeout``
-    seconds instead of blocking the test run."""
-    from tests.browser import Chromium, chromium_path
+def required_chromium() -> str:
+    """Chromium's path; without it the test is skipped, or fails when ``CI`` is set (.ci/run installs it)."""
+    from tests.browser import chromium_path
 
     executable = chromium_path()
     if executable is None:
+        if os.environ.get("CI"):
+            pytest.fail("CI is set and Chromium is missing: .ci/run installs it (apt-get install chromium)")
         pytest.skip("Chromium is not installed (apt-get install chromium)")
+    return executable
+
+
+def test_the_browser_gives_up_at_its_deadline():
+    """A DevTools command with no reply (a promise that never settles) raises after ``timeout``
+    seconds instead of blocking the test run."""
+    from tests.browser import Chromium
+
+    executable = required_chromium()
     with Chromium(executable, timeout=10) as browser:
         browser.open("about:blank")
         assert browser.call("Runtime.evaluate", {"expression": "6 * 7"})["result"]["value"] == 42
