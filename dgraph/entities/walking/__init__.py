@@ -1,0 +1,2 @@
+"""Walking: footstep plans, the contact schedule, the ZMP/LIPM pattern generator, swing trajectories
+(thesis §2.4, §4.4; the walking pattern generator of Ch. 4's flat walks)."""
