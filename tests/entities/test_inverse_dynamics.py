@@ -138,6 +138,39 @@ def test_contact_removed_at_run_time_drops_its_forces():
     assert solver.contact_wrenches(0)[0, 2] > 100
 
 
+@pytest.mark.parametrize("scale", [0.0, 0.25, 0.6])
+def test_a_scaled_normal_force_bound_caps_the_soles_load(scale):
+    """A contact being removed: its normal force stays below ``scale * max_normal_force`` (1000 N),
+    the other sole carries the rest of the weight; at 0 the sole carries nothing (its lower
+    bound follows the upper one down)."""
+    graph = build()
+    solver, left = graph["solver"], graph["left_foot"]
+    weight = graph["robot"].state(0).total_mass * 9.81
+    left.normal_force_scale.set(scale)
+    wrenches = solver.contact_wrenches(0)
+    assert solver.status(0) == SOLVED
+    assert wrenches[0, 2] <= 1000.0 * scale + 1e-2  # within the solver tolerance
+    assert wrenches[0, 2] + wrenches[1, 2] == pytest.approx(weight, rel=1e-4)
+    if scale == 0.0:
+        assert abs(wrenches[0, 2]) < 1e-2
+    else:  # free below the cap: the standing QP shares the weight (~500 N a sole)
+        assert wrenches[0, 2] == pytest.approx(min(1000.0 * scale, weight / 2), rel=0.1)
+
+
+def test_a_high_force_weight_scale_unloads_a_new_contact():
+    """A contact being created: with its force weight scaled up, the QP shifts load to the other
+    sole (the force jump of stack-of-tasks/tsid issue #88 is what the ramp avoids)."""
+    graph = build()
+    solver, left = graph["solver"], graph["left_foot"]
+    even = solver.contact_wrenches(0)[0, 2]
+    left.force_weight_scale.set(1e4)
+    loaded = solver.contact_wrenches(0)
+    assert solver.status(0) == SOLVED
+    assert loaded[0, 2] < 0.5 * even and loaded[1, 2] > even
+    left.force_weight_scale.set(1.0)
+    assert solver.contact_wrenches(0)[0, 2] == pytest.approx(even, rel=1e-6)
+
+
 def test_anchor_is_taken_at_the_first_tick_and_released_when_inactive():
     graph = build()
     foot = graph["left_foot"]

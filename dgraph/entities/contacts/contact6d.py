@@ -113,7 +113,10 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
     ``corners``: the force variables).
     Inputs: ``robot`` (RobotModel state), ``kp``, ``kd`` (drift correction gains; 0: the
     rigid constraint ``J a + J_dot v = 0``), ``active`` (bool; commands ``activate`` /
-    ``deactivate`` set it; an inactive contact adds nothing to the QP).
+    ``deactivate`` set it; an inactive contact adds nothing to the QP), ``normal_force_scale``
+    (``s``: the total normal force within ``[min(f_min, s f_max), s f_max]``; a scheduler ramps it
+    to 0 before lift-off) and ``force_weight_scale`` (multiplies ``force_weight``; a scheduler
+    starts it high at touch-down and ramps it to 1: stack-of-tasks/tsid issue #88).
     State: ``anchor`` (the anchored placement, ``None`` while inactive).
     Outputs: ``contact`` (:class:`ContactConstraint`, with ``e``), ``error`` (``e``, 6).
     """
@@ -173,7 +176,8 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
             cached = self._anchor = (anchor, anchor.rotation.T.tolist(), anchor.translation.tolist())
         return cached[1], cached[2]
 
-    @dg.output(dtype=ContactConstraint, depends=("robot", "kp", "kd", "active", "anchor"))
+    @dg.output(dtype=ContactConstraint, depends=("robot", "kp", "kd", "active", "anchor", "normal_force_scale",
+                                                 "force_weight_scale"))
     def contact(self, t: int) -> ContactConstraint:
         """Motion rows, force generator and friction rows at ``t``: ``J a = -Kp e - Kd V - J_dot v``
         (Eq. 4.10 with the drift correction), ``e`` and the right-hand side in Python floats (six
@@ -185,8 +189,9 @@ class Contact6d(AnchoredContact, FrameReader, dg.Entity):
         gains = self._gains
         rhs = motion_rhs(gains.floats("kp", 6, t), gains.floats("kd", 6, t), error, frame.velocity.tolist(),
                          frame.drift.tolist())
+        lower, upper, force_weight = self.force_terms(t)
         return ContactConstraint(self.name, bool(self.active(t)), frame.jacobian, rhs, self._generator,
-                                 self._friction, self._lower, self._upper, self.force_weight, rotation,
+                                 self._friction, lower, upper, force_weight, rotation,
                                  np.array(error), force_metric=self._metric)
 
     @dg.output(shape=(6,), depends=("contact",))

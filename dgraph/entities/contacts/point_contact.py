@@ -53,7 +53,8 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
     robot's side: the direction of the force on the robot), ``mu``, ``min_normal_force``,
     ``max_normal_force`` (N), ``force_weight``.
     Inputs: ``robot``, ``kp``, ``kd`` (scalar or 3), ``active`` (commands ``activate`` /
-    ``deactivate``), ``force_reference`` (3, N, world).
+    ``deactivate``), ``force_reference`` (3, N, world), ``normal_force_scale`` and
+    ``force_weight_scale`` (ramps of the normal-force bound and of the force weight, as Contact6d).
     State: ``anchor`` (3, the anchored point; None while inactive).
     Outputs: ``contact`` (:class:`ContactConstraint`), ``error`` (``p - p_a``), ``position`` (``p``).
     """
@@ -101,7 +102,8 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
         state = self.robot(t)
         return state.frame(self.frame_index(state), WORLD).translation
 
-    @dg.output(dtype=ContactConstraint, depends=("robot", "kp", "kd", "active", "force_reference", "anchor"))
+    @dg.output(dtype=ContactConstraint, depends=("robot", "kp", "kd", "active", "force_reference", "anchor",
+                                                 "normal_force_scale", "force_weight_scale"))
     def contact(self, t: int) -> ContactConstraint:
         """Motion rows, friction rows and the force reference at ``t``."""
         state = self.robot(t)
@@ -109,8 +111,9 @@ class PointContact(AnchoredContact, FrameReader, dg.Entity):
         error = frame.translation - self.anchor_or_here(t)
         kp, kd = self._gains.vector("kp", 3, t), self._gains.vector("kd", 3, t)
         rhs = -kp * error - kd * frame.velocity[:3] - frame.drift[:3]
+        lower, upper, force_weight = self.force_terms(t)
         return ContactConstraint(self.name, bool(self.active(t)), frame.jacobian[:3], rhs, self._generator,
-                                 self._friction, self._lower, self._upper, self.force_weight, self._rotation,
+                                 self._friction, lower, upper, force_weight, self._rotation,
                                  error, self._force_reference(t))
 
     def _force_reference(self, t: int) -> np.ndarray | None:
