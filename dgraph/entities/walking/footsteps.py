@@ -259,7 +259,10 @@ class FootstepPlan:
         first phase, progress 0; from ``duration`` on: the last one, progress 1)."""
         index = self.phase_index(time)
         phase = self.phases[index]
-        progress = min(max((time - phase.start) / phase.duration, 0.0), 1.0) if phase.duration > 0.0 else 1.0
+        if phase.duration > 0.0:
+            progress = min(max((time - phase.start) / phase.duration, 0.0), 1.0)
+        else:  # a zero-length first phase, before the start or at it
+            progress = 0.0 if time < phase.start else 1.0
         return index, phase, progress
 
     def stance_placements(self, time: float) -> dict[str, np.ndarray]:
@@ -280,8 +283,8 @@ class FootstepPlan:
         ends = np.array([phase.end for phase in self.phases])
         index = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, len(starts) - 1)
         length = ends[index] - starts[index]
-        progress = np.clip(np.divide(times - starts[index], length, out=np.ones_like(times), where=length > 0.0),
-                           0.0, 1.0)
+        reached = (times >= ends[index]).astype(float)  # the progress of a zero-length phase
+        progress = np.clip(np.divide(times - starts[index], length, out=reached, where=length > 0.0), 0.0, 1.0)
         zmp_from = np.array([phase.zmp_from for phase in self.phases])
         zmp_to = np.array([phase.zmp_to for phase in self.phases])
         return zmp_from[index] + progress[:, None] * (zmp_to[index] - zmp_from[index])
