@@ -10,5 +10,7 @@ from dgraph.entities.walking.footsteps import (
     straight_walk,
     turning_walk,
 )
+from dgraph.entities.walking.planner import FootstepPlanner
 
-__all__ = ["Footstep", "FootstepPlan", "Phase", "SoleShape", "lateral_walk", "straight_walk", "turning_walk"]
+__all__ = ["Footstep", "FootstepPlan", "FootstepPlanner", "Phase", "SoleShape", "lateral_walk", "straight_walk",
+           "turning_walk"]
