@@ -11,6 +11,7 @@ from dgraph.entities.walking.footsteps import (
     turning_walk,
 )
 from dgraph.entities.walking.planner import FootstepPlanner
+from dgraph.entities.walking.swing import SwingPath, SwingTrajectory
 
-__all__ = ["Footstep", "FootstepPlan", "FootstepPlanner", "Phase", "SoleShape", "lateral_walk", "straight_walk",
-           "turning_walk"]
+__all__ = ["Footstep", "FootstepPlan", "FootstepPlanner", "Phase", "SoleShape", "SwingPath", "SwingTrajectory",
+           "lateral_walk", "straight_walk", "turning_walk"]
