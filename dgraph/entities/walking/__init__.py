@@ -11,7 +11,8 @@ from dgraph.entities.walking.footsteps import (
     turning_walk,
 )
 from dgraph.entities.walking.planner import FootstepPlanner
+from dgraph.entities.walking.scheduler import ContactScheduler
 from dgraph.entities.walking.swing import SwingPath, SwingTrajectory
 
-__all__ = ["Footstep", "FootstepPlan", "FootstepPlanner", "Phase", "SoleShape", "SwingPath", "SwingTrajectory",
-           "lateral_walk", "straight_walk", "turning_walk"]
+__all__ = ["ContactScheduler", "Footstep", "FootstepPlan", "FootstepPlanner", "Phase", "SoleShape", "SwingPath",
+           "SwingTrajectory", "lateral_walk", "straight_walk", "turning_walk"]
