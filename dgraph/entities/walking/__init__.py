@@ -10,9 +10,10 @@ from dgraph.entities.walking.footsteps import (
     straight_walk,
     turning_walk,
 )
+from dgraph.entities.walking.pattern_generator import ComPlan, ZmpPatternGenerator
 from dgraph.entities.walking.planner import FootstepPlanner
 from dgraph.entities.walking.scheduler import ContactScheduler
 from dgraph.entities.walking.swing import SwingPath, SwingTrajectory
 
-__all__ = ["ContactScheduler", "Footstep", "FootstepPlan", "FootstepPlanner", "Phase", "SoleShape", "SwingPath",
-           "SwingTrajectory", "lateral_walk", "straight_walk", "turning_walk"]
+__all__ = ["ComPlan", "ContactScheduler", "Footstep", "FootstepPlan", "FootstepPlanner", "Phase", "SoleShape",
+           "SwingPath", "SwingTrajectory", "ZmpPatternGenerator", "lateral_walk", "straight_walk", "turning_walk"]
