@@ -86,7 +86,7 @@ def padded_polygons(polygons: Sequence[tuple[np.ndarray, np.ndarray]],
     return np.stack([p[0] for p in padded]), np.stack([p[1] for p in padded])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LipmTrajectory:
     """A CoM trajectory of piecewise-constant jerk, on both horizontal axes (the last axis: x, y).
 
@@ -137,7 +137,7 @@ class LipmTrajectory:
         return self.states[:, 0] + self.states[:, 1] / self.omega
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class MpcResult:
     """One solve: its :class:`~dgraph.control.status.Status`, ProxQP iterations, wall time (s) of
     the assembly and the solve, and the trajectory (None unless solved)."""
