@@ -1,0 +1,261 @@
+"""WalkingView: a walk in Rerun's 3D view (the planned footprints, the current support polygon, the
+planned and measured ZMP, the CoM and the DCM on the ground)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+import dgraph as dg
+from dgraph.entities.recording.rerun_stream import (
+    SINKS,
+    RerunStream,
+    default_flush_every,
+    open_stream_for,
+    sink_mode,
+)
+from dgraph.entities.walking.footsteps import SIDES, FootstepPlan, convex_hull
+
+FOOT_COLORS = {"left": (40, 110, 230), "right": (230, 90, 40)}
+"""The colour of each foot's footprints (RGB)."""
+SUPPORT_POLYGON_COLOR = (40, 170, 60)
+POINT_COLORS = {
+    "zmp_reference": (250, 190, 0),
+    "zmp_measured": (220, 30, 30),
+    "com_reference": (150, 150, 150),
+    "com_measured": (20, 20, 20),
+    "dcm_reference": (170, 60, 200),
+}
+"""The point inputs, drawn on the ground in these colours (RGB) when plugged or set."""
+FOOTPRINT_RADIUS = 0.003
+SUPPORT_POLYGON_RADIUS = 0.005
+POINT_RADIUS = 0.015
+"""Line half-widths and point radii, in metres."""
+INITIAL_LABEL = "start"
+"""The label of the initial footprints (a footstep's is its index in the plan)."""
+
+
+def closed_strip(vertices: np.ndarray) -> np.ndarray:
+    """``vertices`` (k, 3) followed by the first one again: a closed line strip (k + 1, 3)."""
+    return np.vstack([vertices, vertices[:1]])
+
+
+def footprint_strips(plan: FootstepPlan) -> dict[str, tuple[list[np.ndarray], list[str]]]:
+    """Per foot, the closed outlines (5, 3) of its planned soles (``plan.sole.corners`` of each
+    placement: the initial one, then its footsteps in order) and their labels (``start``, then
+    the footstep's index in ``plan.steps``)."""
+    strips: dict[str, tuple[list[np.ndarray], list[str]]] = {}
+    for side, placement in zip(SIDES, (plan.initial_left, plan.initial_right), strict=True):
+        strips[side] = ([closed_strip(plan.sole.corners(placement))], [INITIAL_LABEL])
+    for index, step in enumerate(plan.steps):
+        outlines, labels = strips[step.side]
+        outlines.append(closed_strip(plan.sole.corners(step.placement)))
+        labels.append(str(index))
+    return strips
+
+
+def support_polygon(plan: FootstepPlan, time: float) -> tuple[np.ndarray, float]:
+    """The support polygon at plan time ``time`` (s) as a closed strip (k + 1, 3) and the ground
+    height: the convex hull (counter-clockwise, no collinear vertex) of the horizontal corners of
+    the stance soles (``plan.sole.corners`` of ``plan.stance_placements(time)``), at the mean
+    height of the stance sole origins."""
+    stance = plan.stance_placements(time).values()
+    corners = np.vstack([plan.sole.corners(placement)[:, :2] for placement in stance])
+    ground = float(np.mean([placement[2, 3] for placement in stance]))
+    hull = convex_hull(corners)
+    return closed_strip(np.column_stack([hull, np.full(len(hull), ground)])), ground
+
+
+@dg.register
+class WalkingView(dg.Entity):
+    """Shows a walk in Rerun's 3D view, under the entity path ``path`` (default ``world/walking``).
+
+    Static, when a plan is first drawn (again if the plugged plan changes): every planned
+    footprint, ``<path>/footprints/left`` and ``<path>/footprints/right`` (one colour per foot),
+    a closed line strip through the four sole corners ``p + R c_k`` of
+    :meth:`~dgraph.entities.walking.footsteps.SoleShape.corners` (5 vertices, the first one
+    repeated), labelled ``start`` for the initial feet and with its index in ``plan.steps`` for a
+    footstep.
+
+    Every ``decimation`` ticks (and at the first tick), on the ``tick`` and ``time`` timelines,
+    at plan time ``s = t dt - start`` (the planner's convention, walking notes §1.9):
+
+    * ``<path>/support_polygon``: the convex hull of the corners of the stance soles
+      (``plan.stance_placements(s)``; both feet in double support), projected on the ground (the
+      mean height ``z_g`` of the stance sole origins), a closed line strip;
+    * ``<path>/<input>``, for each point input plugged or set (an unplugged one is not drawn):
+      the point ``(x, y, z_g)`` of the input ``(x, y, z)``, the ground projection of the planned
+      ZMP, the measured ZMP, the planned CoM, the planned DCM and the measured CoM, each its own
+      entity so that the viewer shows or hides it alone.
+
+    Like the :class:`~dgraph.entities.recording.RobotView` it reads in :meth:`observe`, keeps
+    what it read when the tick commits, buffers and sends every ``flush_every`` ticks (one
+    ``send_columns`` per entity), and writes into the graph's shared recording
+    (:func:`~dgraph.entities.recording.rerun_stream.open_stream_for`).
+
+    Parameters: ``decimation``, ``start`` (s: plan time 0 is tick ``start / dt``), ``path``
+    (entity path prefix), ``rerun`` (``save`` | ``spawn`` | ``serve`` | ``off``; not given: as the
+    :class:`~dgraph.entities.recording.Recorder`'s, ``save`` if ``rrd_path`` is given, else the
+    session's default, nothing for the library), ``rrd_path``, ``flush_every``, ``dt`` (default:
+    the graph's). Inputs: ``plan`` (:class:`~dgraph.entities.walking.footsteps.FootstepPlan`),
+    and, each optional, ``zmp_reference``, ``zmp_measured``, ``com_reference``,
+    ``dcm_reference``, ``com_measured`` (3, world). No outputs: the loop calls it every tick as
+    an observer.
+    """
+
+    observes = True
+    decimation = dg.Param(20, kind="int", minimum=1, doc="draw one tick in N (20: 50 Hz at 1 kHz)")
+    start = dg.Param(0.0, kind="float", minimum=0.0, doc="time in s (t dt) at which the plan starts")
+    path = dg.Param("world/walking", kind="str", doc="Rerun entity path prefix of the walk")
+    rerun = dg.Param(None, kind="str", choices=SINKS,
+                     doc="Rerun sink (default: save if rrd_path is given, else off unless dgraph run saves)")
+    rrd_path = dg.Param(None, kind="str", doc=".rrd file for rerun=save (default out/<graph name>.rrd)")
+    flush_every = dg.Param(None, kind="int", minimum=1,
+                           doc="ticks buffered before a Rerun send (default: 1000 to a file, 200 to a viewer)")
+    dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
+    if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
+        def __init__(
+            self, name: str, *, decimation: int = 20, start: float = 0.0, path: str = "world/walking",
+            rerun: Literal["off", "save", "spawn", "serve"] | None = None, rrd_path: str | None = None,
+            flush_every: int | None = None, dt: float | None = None,
+        ) -> None: ...
+
+    plan = dg.Input(dtype=FootstepPlan, doc="the footstep plan")
+    zmp_reference = dg.Input(shape=(3,), default=np.zeros(3), doc="planned ZMP (world; drawn if plugged or set)")
+    zmp_measured = dg.Input(shape=(3,), default=np.zeros(3), doc="measured ZMP (world; drawn if plugged or set)")
+    com_reference = dg.Input(shape=(3,), default=np.zeros(3), doc="planned CoM (world; drawn if plugged or set)")
+    dcm_reference = dg.Input(shape=(3,), default=np.zeros(3), doc="planned DCM (world; drawn if plugged or set)")
+    com_measured = dg.Input(shape=(3,), default=np.zeros(3), doc="measured CoM (world; drawn if plugged or set)")
+
+    def configure(self) -> None:
+        """Resolve the sink and check the path; nothing is opened before the first tick."""
+        self.rerun = sink_mode(self.rerun, self.rrd_path)
+        if self.flush_every is None:
+            self.flush_every = default_flush_every(self.rerun)
+        self.path = self.path.strip("/")
+        if not self.path or any(not part for part in self.path.split("/")):
+            raise dg.ParamError(f"{self.name}: path must be an entity path such as 'world/walking', got "
+                                f"{self.params['path']!r}", entity=self.name)
+        self._stream: RerunStream | None = None
+        self._staged: tuple[int, FootstepPlan, np.ndarray, dict[str, np.ndarray]] | None = None
+        self._drawn_plan: FootstepPlan | None = None
+        self._polygons: dict[int, tuple[np.ndarray, float]] = {}  # by phase index, of _polygons_plan
+        self._polygons_plan: FootstepPlan | None = None
+        self._ticks: list[int] = []
+        self._strips: list[np.ndarray] = []
+        self._points: dict[str, tuple[list[int], list[np.ndarray]]] = {name: ([], []) for name in POINT_COLORS}
+        self._styled: set[str] = set()  # the point entities whose colour and radius were logged
+        self._last_send: int | None = None
+        self.closed = False
+
+    @property
+    def stream(self) -> RerunStream | None:
+        """The Rerun stream it draws into (None before its first tick, or with ``rerun=off``)."""
+        return self._stream
+
+    def footprint_bounds(self) -> np.ndarray | None:
+        """(2, 3) the lowest and highest corner coordinates of the drawn plan's footprints, or
+        None before a plan is drawn."""
+        if self._drawn_plan is None:
+            return None
+        corners = np.vstack([np.vstack(outlines) for outlines, _ in footprint_strips(self._drawn_plan).values()])
+        return np.array([corners.min(axis=0), corners.max(axis=0)])
+
+    # -- tick -----------------------------------------------------------------------------
+    def observe(self, t: int) -> None:
+        """Every ``decimation`` ticks, read the plan and the plugged points at ``t`` and compute
+        what is drawn; kept if the tick commits."""
+        if self.closed or self.rerun == "off":
+            return
+        if self._stream is None:
+            if self.graph is None:
+                raise dg.GraphError(f"{self.name}: a walking view must be in a graph", entity=self.name)
+            self._stream = open_stream_for(self)
+        if t % self.decimation and (self._drawn_plan is not None or self._ticks):
+            self._staged = None
+            return
+        plan = self.plan(t)
+        strip, ground = self._support_polygon(plan, t * self.dt - self.start)
+        points = {}
+        for name in POINT_COLORS:
+            inp = self.inputs[name]
+            if inp.source is not None or inp.is_set:
+                x, y, _ = inp(t)
+                points[name] = np.array([x, y, ground])
+        self._staged = (t, plan, strip, points)
+
+    def _support_polygon(self, plan: FootstepPlan, time: float) -> tuple[np.ndarray, float]:
+        """:func:`support_polygon`, computed once per phase of the plan."""
+        if plan is not self._polygons_plan:
+            self._polygons, self._polygons_plan = {}, plan
+        phase = plan.phase_index(time)
+        if phase not in self._polygons:
+            self._polygons[phase] = support_polygon(plan, time)
+        return self._polygons[phase]
+
+    def commit_state(self, t_next: int) -> None:
+        """The tick committed: draw a new plan's footprints, buffer the tick, send every ``flush_every``."""
+        staged, self._staged = self._staged, None
+        if staged is None or self._stream is None:
+            return
+        t, plan, strip, points = staged
+        if plan is not self._drawn_plan:
+            self._log_footprints(plan)
+        self._ticks.append(t)
+        self._strips.append(strip)
+        for name, point in points.items():
+            ticks, values = self._points[name]
+            ticks.append(t)
+            values.append(point)
+        if self._last_send is None:
+            self._last_send = t
+        if t - self._last_send >= self.flush_every:
+            self._send()
+
+    def _log_footprints(self, plan: FootstepPlan) -> None:
+        stream = self._stream
+        assert stream is not None
+        rr, rec = stream._rr, stream.rec
+        if self._drawn_plan is None:
+            rec.log(self.path.split("/")[0], rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        self._drawn_plan = plan
+        for side, (outlines, labels) in footprint_strips(plan).items():
+            rec.log(f"{self.path}/footprints/{side}",
+                    rr.LineStrips3D(outlines, labels=labels, colors=FOOT_COLORS[side], radii=FOOTPRINT_RADIUS),
+                    static=True)
+
+    def _send(self) -> None:
+        stream = self._stream
+        if not self._ticks or stream is None:
+            return
+        rr = stream._rr
+        self._send_columns("support_polygon", self._ticks, rr.LineStrips3D.columns(strips=self._strips),
+                           rr.LineStrips3D.from_fields(colors=SUPPORT_POLYGON_COLOR, radii=SUPPORT_POLYGON_RADIUS))
+        for name, (ticks, values) in self._points.items():
+            if ticks:
+                self._send_columns(name, ticks, rr.Points3D.columns(positions=np.array(values)),
+                                   rr.Points3D.from_fields(colors=POINT_COLORS[name], radii=POINT_RADIUS))
+        self._last_send = self._ticks[-1]
+        self._ticks, self._strips = [], []
+        self._points = {name: ([], []) for name in POINT_COLORS}
+
+    def _send_columns(self, entity: str, ticks: list[int], columns: Any, style: Any) -> None:
+        """Send ``columns`` to ``<path>/<entity>`` at ``ticks``; its ``style`` (colour, width) is
+        logged once, as static data."""
+        stream = self._stream
+        assert stream is not None
+        if entity not in self._styled:
+            self._styled.add(entity)
+            stream.rec.log(f"{self.path}/{entity}", style, static=True)
+        stream.rec.send_columns(f"{self.path}/{entity}", indexes=stream.indexes(np.array(ticks, dtype=np.int64)),
+                                columns=columns)
+
+    def close(self) -> None:
+        """Send the buffered ticks and release the shared stream (idempotent)."""
+        if self.closed:
+            return
+        self.closed = True
+        if self._stream is not None:
+            self._send()
+            self._stream.close()
