@@ -178,3 +178,48 @@ def test_loading_and_running_graph_files_from_python_writes_nothing(tmp_path):
             g.run(ticks=5, progress=False)
         assert all(e.rerun == "off" for e in g if e.type_name in ("Recorder", "RobotView")), name
     assert list(tmp_path.rglob("*")) == []  # the test runs in tmp_path
+
+
+def test_a_walking_view_adds_its_top_view_and_the_planned_vs_measured_panels(tmp_path):
+    """Rule 0 and the top view, from the graph's entities: the blueprint they make, sent to the
+    walking view's recording and read back."""
+    from dgraph.entities.operators import Constant
+    from dgraph.entities.recording.layout import blueprint, walking_top_views
+    from tests.entities.test_walking_view import walking_graph
+
+    rrd = tmp_path / "walking.rrd"
+    g, view = walking_graph(rrd)
+    g.add(Constant("robot_com", value=[0.0, 0.0, 0.87]))
+    g.plug("robot_com.output", "walking.com_measured")
+    g.run(ticks=40)
+    recorded = ["pattern.zmp", "zmp.zmp", "pattern.com_position", "robot_com.output", "pattern.dcm", "dev.x"]
+    panels = default_panels(recorded, g)
+    assert [(p.title, p.signals) for p in panels] == [
+        ("ZMP x/y: planned vs measured", ("pattern.zmp", "zmp.zmp")),
+        ("CoM x/y: planned vs measured", ("pattern.com_position", "robot_com.output")),
+        ("pattern.dcm", ("pattern.dcm",)), ("dev.x", ("dev.x",))]
+    assert default_panels(recorded) == [Panel(name, (name,)) for name in recorded]  # without the graph: rule 6
+    assert walking_top_views(g, None) == [] and walking_top_views(g, object()) == []
+    assert view.stream is not None and view.stream.send_blueprint(blueprint(panels, [], top_views=walking_top_views(
+        g, view.stream)))
+    g.close()
+    saved = read_blueprint(str(rrd))
+    views = {v["name"]: v for v in saved["views"].values()}
+    assert set(views) == {"walking (top view)", "ZMP x/y: planned vs measured", "CoM x/y: planned vs measured",
+                          "pattern.dcm", "dev.x", "faults"}
+    zmp = views["ZMP x/y: planned vs measured"]
+    assert zmp["contents"] == ["/signals/pattern/zmp", "/signals/zmp/zmp"]
+    roles = {"/signals/pattern/zmp": "planned", "/signals/zmp/zmp": "measured"}
+    assert zmp["overrides"] == {path: {"names": [f"{role} x", f"{role} y", f"{role} z"],
+                                       "visible_series": [True, True, False]} for path, role in roles.items()}
+    top = views["walking (top view)"]
+    assert (top["kind"], top["origin"]) == ("3D", "/world/walking")
+    plan = g["footsteps"].plan(0)
+    corners = np.vstack([plan.sole.corners(p) for p in (plan.initial_left, plan.initial_right,
+                                                       *(s.placement for s in plan.steps))])
+    centre = 0.5 * (corners.min(axis=0) + corners.max(axis=0))
+    length = np.ptp(corners[:, 0])  # 1.2 m of walk and a sole: the largest extent
+    assert np.allclose(top["eye"]["look_target"], centre, atol=1e-6)
+    assert np.allclose(top["eye"]["position"], centre + 1.5 * length * np.array([-0.1, 0.0, 1.0]), atol=1e-5)
+    root = saved["containers"][saved["root"].split("/", 1)[1]]
+    assert saved["views"][root["contents"][0].split("/", 1)[1]]["name"] == "walking (top view)"  # on the left

@@ -4,8 +4,21 @@ A :class:`~dgraph.entities.recording.Recorder` sends one blueprint with its reco
 ``layout`` parameter): the robot's 3D view large on the left (when a ``RobotView`` draws into
 the same recording), time-series panels on the right, and the ``faults`` text log under them.
 
+Given the graph's entities, a ``WalkingView`` drawing into the recording adds a 3D view of its
+entities alone, seen from above (``<name> (top view)``, under the robot's view;
+:func:`walking_top_views`): its footprints, support polygon and points are also in the robot's
+view (they are under ``/world``), but there the robot's feet hide the ZMP, which lies under a
+stance sole; from above, without the meshes, one sees the ZMP move inside the support polygon.
+
 The default panels group the recorded signals ``entity.signal`` by their names, first rule first:
 
+0. **planned and measured, of a walk** (given the graph's entities): for each ``WalkingView``,
+   the panel ``ZMP x/y: planned vs measured`` overlays the recorded signals plugged into its
+   ``zmp_reference`` (the pattern generator's ``zmp``) and ``zmp_measured`` (a ZmpEstimator's
+   ``zmp``) inputs, when both are recorded, and ``CoM x/y: planned vs measured`` those plugged
+   into ``com_reference`` and ``com_measured``; x and y only (z is the ground's height for the
+   ZMP, the nearly constant CoM height for the CoM), named ``planned x``, ``measured y``... in
+   the legend. A signal shown there gets no panel of its own under rule 6.
 1. **reference and measured, overlaid**: a signal whose entity or signal name is
    ``<K>_reference`` is a reference of the quantity ``K`` (``com_reference.output``,
    ``stabilizer.zmp_reference``; its derivatives, signals named ``velocity``, ``acceleration``
@@ -24,7 +37,7 @@ A layout can also be given as a list of panels ``{title: ..., signals: [entity.s
 from __future__ import annotations
 
 import uuid
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -41,11 +54,33 @@ FAULTS_PATH = "/faults"
 
 
 @dataclass(frozen=True)
+class Series:
+    """How a signal's components are drawn in a panel: their names in the legend and whether
+    each one is shown."""
+
+    names: tuple[str, ...]
+    visible: tuple[bool, ...]
+
+
+@dataclass(frozen=True)
 class Panel:
-    """A time-series plot: its title and the recorded signals (``entity.signal``) it overlays."""
+    """A time-series plot: its title, the recorded signals (``entity.signal``) it overlays and,
+    if given, how each one's components are drawn (default: all, named as recorded)."""
 
     title: str
     signals: tuple[str, ...]
+    series: tuple[Series, ...] = ()
+
+
+@dataclass(frozen=True)
+class TopView:
+    """A 3D view of the entities under ``origin``, its eye ``eye_distance`` (m) above
+    ``look_target`` (the viewer's default eye if ``look_target`` is None)."""
+
+    name: str
+    origin: str
+    look_target: tuple[float, ...] | None = None
+    eye_distance: float = 0.0
 
 
 def signal_path(name: str) -> str:
@@ -113,8 +148,60 @@ def _category(signal: str) -> str | None:
     return None
 
 
-def default_panels(recorded: Sequence[str]) -> list[Panel]:
-    """The panels of the default layout for the recorded signals (see the module docstring)."""
+PLANNED_VS_MEASURED = (("ZMP", "zmp_reference", "zmp_measured"), ("CoM", "com_reference", "com_measured"))
+"""The panels of rule 0: the quantity, a WalkingView's input of the plan and of the measure."""
+TOP_VIEW_DISTANCE = 1.5
+"""The top view's eye height over the footprints' largest horizontal extent (it sees them all
+with a field of view of 2 atan(1 / 3) = 37 degrees or more)."""
+TOP_VIEW_MIN_DISTANCE = 1.0
+"""The top view's lowest eye height (m), for a walk of a step or two."""
+TOP_VIEW_TILT = 0.1
+"""How far the top view's eye is behind the look target (along -x), per metre of height: the
+view looks down with the walk's heading (+x) up, without the degenerate straight-down eye."""
+
+
+def walking_panels(entities: Iterable[Any], recorded: Sequence[str]) -> list[Panel]:
+    """The panels of rule 0 (see the module docstring) for the ``WalkingView`` entities among
+    ``entities``, each panel once."""
+    panels: list[Panel] = []
+    for entity in entities:
+        if entity.type_name != "WalkingView":
+            continue
+        for quantity, planned, measured in PLANNED_VS_MEASURED:
+            sources = [entity.inputs[name].source for name in (planned, measured)]
+            names = tuple(source.full_name for source in sources if source is not None)
+            if len(names) == 2 and all(name in recorded for name in names) \
+                    and all(panel.signals != names for panel in panels):
+                series = tuple(Series((f"{role} x", f"{role} y", f"{role} z"), (True, True, False))
+                               for role in ("planned", "measured"))
+                panels.append(Panel(f"{quantity} x/y: planned vs measured", names, series))
+    return panels
+
+
+def walking_top_views(entities: Iterable[Any], stream: object) -> list[TopView]:
+    """A :class:`TopView` of each ``WalkingView`` among ``entities`` that draws into ``stream``:
+    origin its path, looking at the centre of its footprints from ``TOP_VIEW_DISTANCE`` times
+    their largest horizontal extent above (at least ``TOP_VIEW_MIN_DISTANCE``)."""
+    views = []
+    for entity in entities:
+        if entity.type_name != "WalkingView" or stream is None or entity.stream is not stream:
+            continue
+        bounds = entity.footprint_bounds()
+        if bounds is None:
+            views.append(TopView(f"{entity.name} (top view)", f"/{entity.path}"))
+            continue
+        extent = float(max(bounds[1, :2] - bounds[0, :2]))
+        target = tuple(float(x) for x in bounds.mean(axis=0))
+        views.append(TopView(f"{entity.name} (top view)", f"/{entity.path}", target,
+                             max(TOP_VIEW_DISTANCE * extent, TOP_VIEW_MIN_DISTANCE)))
+    return views
+
+
+def default_panels(recorded: Sequence[str], entities: Iterable[Any] = ()) -> list[Panel]:
+    """The panels of the default layout for the recorded signals of a graph whose entities are
+    ``entities`` (see the module docstring; rule 0 needs them)."""
+    walking = walking_panels(entities, recorded)
+    shown = {name for panel in walking for name in panel.signals}
     quantities: dict[str, list[str]] = {}
     for name in recorded:
         quantity = _quantity_of_reference(name)
@@ -138,28 +225,30 @@ def default_panels(recorded: Sequence[str]) -> list[Panel]:
             continue
         category = _category(name.partition(".")[2])
         if category is None:
-            alone.append(Panel(name, (name,)))
+            if name not in shown:
+                alone.append(Panel(name, (name,)))
         else:
             shared.setdefault(category, []).append(name)
     order = ("contact forces", "torques", "solver status", "solve time")
     panels += [Panel(category, tuple(shared[category])) for category in order if category in shared]
-    return panels + alone
+    return walking + panels + alone
 
 
-def blueprint(panels: Sequence[Panel], spatial_origins: Sequence[str], faults: bool = True) -> Any:
-    """The Rerun blueprint: a 3D view per origin (the robot, 3/5 of the width), the panels as
-    time-series plots in a grid beside it, the faults text log under them."""
+def blueprint(panels: Sequence[Panel], spatial_origins: Sequence[str], faults: bool = True,
+              top_views: Sequence[TopView] = ()) -> Any:
+    """The Rerun blueprint: a 3D view per origin (the robot, 3/5 of the width), under them the
+    top views, the panels as time-series plots in a grid beside them, the faults text log under
+    the plots."""
     import rerun.blueprint as rrb
 
-    plots: list[Any] = [rrb.TimeSeriesView(name=panel.title, origin="/signals",
-                                           contents=[signal_path(s) for s in panel.signals])
-                        for panel in panels]
+    plots: list[Any] = [_time_series_view(panel) for panel in panels]
     right: Any = rrb.Grid(*plots) if len(plots) > 1 else (plots[0] if plots else None)
     if faults:
         log = rrb.TextLogView(name="faults", origin=FAULTS_PATH)
         right = rrb.Vertical(right, log, row_shares=[5, 1]) if right is not None else log
     spaces = [rrb.Spatial3DView(name="robot" if origin == "/world" else origin.strip("/"), origin=origin)
               for origin in spatial_origins]
+    spaces += [_top_view(view) for view in top_views]
     if not spaces:
         root = right
     else:
@@ -168,12 +257,39 @@ def blueprint(panels: Sequence[Panel], spatial_origins: Sequence[str], faults: b
     return rrb.Blueprint(root)
 
 
+def _time_series_view(panel: Panel) -> Any:
+    """The time-series plot of ``panel``, its series drawn as the panel says (an override of
+    each signal's ``SeriesLines``)."""
+    import rerun as rr
+    import rerun.blueprint as rrb
+
+    overrides = {signal_path(signal): rr.SeriesLines(names=series.names, visible_series=series.visible).visualizer()
+                 for signal, series in zip(panel.signals, panel.series, strict=False)}
+    return rrb.TimeSeriesView(name=panel.title, origin="/signals", contents=[signal_path(s) for s in panel.signals],
+                              overrides=overrides or None)
+
+
+def _top_view(view: TopView) -> Any:
+    """The 3D view of ``view``: its eye above the look target, slightly behind it, z up."""
+    import rerun.blueprint as rrb
+
+    eye = None
+    if view.look_target is not None:
+        x, y, z = view.look_target
+        height = view.eye_distance
+        eye = rrb.EyeControls3D(position=[x - TOP_VIEW_TILT * height, y, z + height], look_target=[x, y, z],
+                                eye_up=[0.0, 0.0, 1.0])
+    return rrb.Spatial3DView(name=view.name, origin=view.origin, eye_controls=eye)
+
+
 def read_blueprint(rrd_path: str) -> dict[str, Any]:
     """The blueprint stored in an .rrd file (its blueprint store, the last value of each part):
     ``views`` (id -> ``{"kind", "name", "origin", "contents"}``, kind ``3D``, ``TimeSeries``,
-    ``TextLog``...), ``containers`` (id -> ``{"kind", "contents", "col_shares", "row_shares"}``,
-    kind ``tabs``, ``horizontal``, ``vertical`` or ``grid``, contents as ``view/<id>`` or
-    ``container/<id>``) and ``root`` (the root container's ``container/<id>``, or ``None``).
+    ``TextLog``..., and if set ``eye``, a 3D view's ``{"position", "look_target", "eye_up"}``, and
+    ``overrides``, entity path -> component -> values, e.g. ``{"names": [...]}``), ``containers``
+    (id -> ``{"kind", "contents", "col_shares", "row_shares"}``, kind ``tabs``, ``horizontal``,
+    ``vertical`` or ``grid``, contents as ``view/<id>`` or ``container/<id>``) and ``root`` (the
+    root container's ``container/<id>``, or ``None``).
     Empty if the file holds no blueprint."""
     import rerun.chunk as chunk
 
@@ -209,9 +325,32 @@ def read_blueprint(rrd_path: str) -> dict[str, Any]:
                 out["containers"].setdefault(parts[1], {})[key] = value
             else:
                 out["root"] = value
+        _read_view_properties(parts, batch, out["views"])
     for container in out["containers"].values():
         if isinstance(container.get("kind"), int):
             container["kind"] = CONTAINER_KINDS.get(container["kind"], str(container["kind"]))
     if isinstance(out["root"], list):  # the UUID's 16 bytes
         out["root"] = f"container/{uuid.UUID(bytes=bytes(out['root']))}"
     return out
+
+
+def _read_view_properties(parts: list[str], batch: Any, views: dict[str, Any]) -> None:
+    """Into ``views``, from the blueprint chunk of the entity path ``parts``: a 3D view's eye
+    (one value per component), or the components a view overrides for an entity (their values)."""
+    if len(parts) < 3 or parts[0] != "view":
+        return
+    if parts[2] == "EyeControls3D":
+        properties, single = views.setdefault(parts[1], {}).setdefault("eye", {}), True
+    elif "overrides" in parts and parts[-2] == "visualizers":  # .../overrides/<entity>/visualizers/<id>
+        path = "/" + "/".join(parts[parts.index("overrides") + 1: -2])
+        properties = views.setdefault(parts[1], {}).setdefault("overrides", {}).setdefault(path, {})
+        single = False
+    else:
+        return
+    for column in batch.schema.names:
+        archetype, _, component = column.partition(":")
+        if not component or archetype == "VisualizerInstruction":
+            continue
+        values = [v for v in batch.column(column).to_pylist() if v is not None]
+        if values:
+            properties[component] = values[-1][0] if single else values[-1]
