@@ -79,15 +79,17 @@ class WalkingView(dg.Entity):
     footstep.
 
     Every ``decimation`` ticks (and at the first tick), on the ``tick`` and ``time`` timelines,
-    at plan time ``s = t dt - start`` (the planner's convention, walking notes §1.9):
+    at plan time ``s = t dt - start`` (the :class:`~dgraph.entities.walking.FootstepPlanner`'s):
 
     * ``<path>/support_polygon``: the convex hull of the corners of the stance soles
       (``plan.stance_placements(s)``; both feet in double support), projected on the ground (the
-      mean height ``z_g`` of the stance sole origins), a closed line strip;
+      mean height ``z_g`` of the stance sole origins), a closed line strip: the polygon the ZMP
+      must stay in (walking notes §1.9, item 3);
     * ``<path>/<input>``, for each point input plugged or set (an unplugged one is not drawn):
       the point ``(x, y, z_g)`` of the input ``(x, y, z)``, the ground projection of the planned
-      ZMP, the measured ZMP, the planned CoM, the planned DCM and the measured CoM, each its own
-      entity so that the viewer shows or hides it alone.
+      ZMP, the measured ZMP, the planned CoM, the planned DCM (``xi = c + c_dot / omega``, thesis
+      Eqs. 2.27-2.28) and the measured CoM, each its own entity so that the viewer shows or hides it
+      alone.
 
     Like the :class:`~dgraph.entities.recording.RobotView` it reads in :meth:`observe`, keeps
     what it read when the tick commits, buffers and sends every ``flush_every`` ticks (one
