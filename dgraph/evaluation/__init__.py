@@ -9,6 +9,18 @@ from dgraph.evaluation.energy import cost_of_transport, mechanical_energy, path_
 from dgraph.evaluation.passivity import passivity_gait_measure, rms_torque
 from dgraph.evaluation.timing import TickStatistics, tick_statistics
 from dgraph.evaluation.tracking import TrackingError, tracking_error
+from dgraph.evaluation.walking import (
+    ForceJump,
+    PhasePassivity,
+    before_fall,
+    contact_switch_force_jumps,
+    first_fall,
+    jerk_statistics,
+    phase_passivity,
+    polygon_margin,
+)
 
-__all__ = ["TickStatistics", "TrackingError", "cost_of_transport", "mechanical_energy", "passivity_gait_measure",
-           "path_length", "rms_torque", "tick_statistics", "tracking_error"]
+__all__ = ["ForceJump", "PhasePassivity", "TickStatistics", "TrackingError", "before_fall",
+           "contact_switch_force_jumps", "cost_of_transport", "first_fall", "jerk_statistics", "mechanical_energy",
+           "passivity_gait_measure", "path_length", "phase_passivity", "polygon_margin", "rms_torque",
+           "tick_statistics", "tracking_error"]
