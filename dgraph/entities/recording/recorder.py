@@ -10,7 +10,14 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.recording.columns import Table
-from dgraph.entities.recording.layout import LAYOUTS, blueprint, default_panels, parse_layout, signal_path
+from dgraph.entities.recording.layout import (
+    LAYOUTS,
+    blueprint,
+    default_panels,
+    parse_layout,
+    signal_path,
+    walking_top_views,
+)
 from dgraph.entities.recording.rerun_stream import SINKS, RerunStream, default_flush_every, open_stream_for, sink_mode
 from dgraph.signals.signal import Signal
 
@@ -176,11 +183,12 @@ class Recorder(dg.Entity):
 
     def _send_blueprint(self) -> None:
         """Send the layout's blueprint (once per sink): the panels (by default, those of the
-        plotted signals), a 3D view of each robot view drawing into the same recording."""
+        plotted signals and the graph's walking views), a 3D view of each robot view and a top
+        view of each walking view drawing into the same recording."""
         if self._layout == "none" or self._stream is None or self._stream.blueprint_sent:
             return
         if self._layout == "default":
-            panels = default_panels([self.signals[i - 1] for i, _, _ in self._plotted or []])
+            panels = default_panels([self.signals[i - 1] for i, _, _ in self._plotted or []], self.graph or [])
         else:
             panels = self._layout
         origins: list[str] = []
@@ -189,7 +197,8 @@ class Recorder(dg.Entity):
                 origin = "/" + entity.path.split("/")[0]
                 if origin not in origins:
                     origins.append(origin)
-        self._stream.send_blueprint(blueprint(panels, origins))
+        self._stream.send_blueprint(blueprint(panels, origins, top_views=walking_top_views(self.graph or [],
+                                                                                         self._stream)))
 
     def _plotted_series(self) -> list[tuple[int, str, list[str]]]:
         """The columns sent to Rerun (numbers; other values are kept in the .npz, not plotted):
