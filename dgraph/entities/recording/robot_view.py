@@ -10,13 +10,11 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.recording.rerun_stream import (
-    SINKS,
     RerunStream,
     component_field,
-    default_flush_every,
     open_stream_for,
-    sink_mode,
 )
+from dgraph.entities.recording.stream_view import StreamView
 from dgraph.entities.robot.loading import load_model, load_robot
 
 FLOOR_HALF_SIZE = 2.0
@@ -68,7 +66,7 @@ class _Link:
 
 
 @dg.register
-class RobotView(dg.Entity):
+class RobotView(StreamView, dg.Entity):
     """Shows the robot in Rerun's 3D view (meshes once, then link poses over time).
 
     At the first committed tick the visual geometries of the example-robot-data ``model`` are
@@ -102,19 +100,13 @@ class RobotView(dg.Entity):
 
     observes = True
     model = dg.Param("talos", kind="name_or_path", doc="example-robot-data robot name or URDF path")
-    decimation = dg.Param(20, kind="int", minimum=1, doc="log the poses one tick in N (20: 50 Hz at 1 kHz)")
     path = dg.Param("world/robot", kind="str", doc="Rerun entity path of the robot")
     floor = dg.Param(True, kind="bool", doc="also log a floor square and world axes")
-    rerun = dg.Param(None, kind="str", choices=SINKS,
-                     doc="Rerun sink (default: save if rrd_path is given, else off unless dgraph run saves)")
-    rrd_path = dg.Param(None, kind="str", doc=".rrd file for rerun=save (default out/<graph name>.rrd)")
-    flush_every = dg.Param(None, kind="int", minimum=1,
-                           doc="ticks buffered before a Rerun send (default: 1000 to a file, 200 to a viewer)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, model: str | Any = "talos", decimation: int = 20, path: str = "world/robot",
-            floor: bool = True, rerun: Literal["off", "save", "spawn", "serve"] | None = None,
-            rrd_path: str | None = None, flush_every: int | None = None,
+            self, name: str, *, decimation: int = 20, rerun: Literal["off", "save", "spawn", "serve"] | None = None,
+            rrd_path: str | None = None, flush_every: int | None = None, model: str | Any = "talos",
+            path: str = "world/robot", floor: bool = True,
         ) -> None: ...
 
     q = dg.Input(shape=("nq",), doc="configuration (Pinocchio convention)")
@@ -122,26 +114,16 @@ class RobotView(dg.Entity):
     def configure(self) -> None:
         """Load the kinematics (the meshes are read when the view first draws: one that records
         nothing reads none)."""
-        self.rerun = sink_mode(self.rerun, self.rrd_path)
-        if self.flush_every is None:
-            self.flush_every = default_flush_every(self.rerun)
-        self.path = self.path.strip("/")
-        if not self.path or any(not part for part in self.path.split("/")):
-            raise dg.ParamError(f"{self.name}: path must be an entity path such as 'world/robot', got "
-                                f"{self.params['path']!r}", entity=self.name)
+        self.configure_stream("world/robot")
         self.pin_model = load_model(self.model, self.name)
         self.nq = self.pin_model.nq
         self._links: list[_Link] | None = None
         self._fields: list[Any] | None = None
         self._data: Any = None
-        self._stream: RerunStream | None = None
         self._statics_sent = False
         self._staged: tuple[int, np.ndarray] | None = None
-        self._ticks: list[int] = []
         self._qs: list[np.ndarray] = []  # the configurations of the buffered ticks
-        self._last_send: int | None = None
         self.skipped: list[str] = []  # geometries that could not be drawn
-        self.closed = False
 
     @property
     def links(self) -> list[_Link]:
@@ -326,11 +308,3 @@ class RobotView(dg.Entity):
             return rr.Ellipsoids3D(half_sizes=[[geom.geometry.radius] * 3], colors=[rgba], fill_mode="solid")
         return None
 
-    def close(self) -> None:
-        """Send the buffered poses and release the shared stream (idempotent)."""
-        if self.closed:
-            return
-        self.closed = True
-        if self._stream is not None:
-            self._send()
-            self._stream.close()

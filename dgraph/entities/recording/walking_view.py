@@ -9,12 +9,10 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.entities.recording.rerun_stream import (
-    SINKS,
     RerunStream,
-    default_flush_every,
     open_stream_for,
-    sink_mode,
 )
+from dgraph.entities.recording.stream_view import StreamView
 from dgraph.entities.walking.footsteps import SIDES, FootstepPlan, convex_hull
 
 FOOT_COLORS = {"left": (40, 110, 230), "right": (230, 90, 40)}
@@ -68,7 +66,7 @@ def support_polygon(plan: FootstepPlan, time: float) -> tuple[np.ndarray, float]
 
 
 @dg.register
-class WalkingView(dg.Entity):
+class WalkingView(StreamView, dg.Entity):
     """Shows a walk in Rerun's 3D view, under the entity path ``path`` (default ``world/walking``).
 
     Static, when a plan is first drawn (again if the plugged plan changes): every planned
@@ -107,20 +105,14 @@ class WalkingView(dg.Entity):
     """
 
     observes = True
-    decimation = dg.Param(20, kind="int", minimum=1, doc="draw one tick in N (20: 50 Hz at 1 kHz)")
     start = dg.Param(0.0, kind="float", minimum=0.0, doc="time in s (t dt) at which the plan starts")
     path = dg.Param("world/walking", kind="str", doc="Rerun entity path prefix of the walk")
-    rerun = dg.Param(None, kind="str", choices=SINKS,
-                     doc="Rerun sink (default: save if rrd_path is given, else off unless dgraph run saves)")
-    rrd_path = dg.Param(None, kind="str", doc=".rrd file for rerun=save (default out/<graph name>.rrd)")
-    flush_every = dg.Param(None, kind="int", minimum=1,
-                           doc="ticks buffered before a Rerun send (default: 1000 to a file, 200 to a viewer)")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, decimation: int = 20, start: float = 0.0, path: str = "world/walking",
-            rerun: Literal["off", "save", "spawn", "serve"] | None = None, rrd_path: str | None = None,
-            flush_every: int | None = None, dt: float | None = None,
+            self, name: str, *, decimation: int = 20, rerun: Literal["off", "save", "spawn", "serve"] | None = None,
+            rrd_path: str | None = None, flush_every: int | None = None, start: float = 0.0,
+            path: str = "world/walking", dt: float | None = None,
         ) -> None: ...
 
     plan = dg.Input(dtype=FootstepPlan, doc="the footstep plan")
@@ -132,24 +124,14 @@ class WalkingView(dg.Entity):
 
     def configure(self) -> None:
         """Resolve the sink and check the path; nothing is opened before the first tick."""
-        self.rerun = sink_mode(self.rerun, self.rrd_path)
-        if self.flush_every is None:
-            self.flush_every = default_flush_every(self.rerun)
-        self.path = self.path.strip("/")
-        if not self.path or any(not part for part in self.path.split("/")):
-            raise dg.ParamError(f"{self.name}: path must be an entity path such as 'world/walking', got "
-                                f"{self.params['path']!r}", entity=self.name)
-        self._stream: RerunStream | None = None
+        self.configure_stream("world/walking")
         self._staged: tuple[int, FootstepPlan, np.ndarray, dict[str, np.ndarray]] | None = None
         self._drawn_plan: FootstepPlan | None = None
         self._polygons: dict[int, tuple[np.ndarray, float]] = {}  # by phase index, of _polygons_plan
         self._polygons_plan: FootstepPlan | None = None
-        self._ticks: list[int] = []
         self._strips: list[np.ndarray] = []
         self._points: dict[str, tuple[list[int], list[np.ndarray]]] = {name: ([], []) for name in POINT_COLORS}
         self._styled: set[str] = set()  # the point entities whose colour and radius were logged
-        self._last_send: int | None = None
-        self.closed = False
 
     @property
     def stream(self) -> RerunStream | None:
@@ -253,11 +235,3 @@ class WalkingView(dg.Entity):
         stream.rec.send_columns(f"{self.path}/{entity}", indexes=stream.indexes(np.array(ticks, dtype=np.int64)),
                                 columns=columns)
 
-    def close(self) -> None:
-        """Send the buffered ticks and release the shared stream (idempotent)."""
-        if self.closed:
-            return
-        self.closed = True
-        if self._stream is not None:
-            self._send()
-            self._stream.close()
