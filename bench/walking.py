@@ -186,9 +186,10 @@ def run(walk: Walk, out: Path) -> None:
     start = time.perf_counter()
     with graph, tqdm(total=ticks, unit="tick", desc=walk.name, mininterval=0.5) as bar:
         for tick in range(ticks):
+            fallen = device.fallen(tick)  # this tick's state, recorded by the step
             graph.step()
             bar.update()
-            if device.fallen(tick):
+            if fallen:
                 break
     walk.wall = time.perf_counter() - start
     walk.data, walk.durations, walk.dt = graph["evaluation"].data(), np.array(durations[1:]), graph.dt
@@ -439,22 +440,18 @@ def summary_table(walks: list[Walk], results: dict[str, dict]) -> str:
 
 
 def zmp_rows(walk: Walk, result: dict[str, object]) -> list[list[str]]:
-    """The ZMP error rows of one walk: against the plan, and against p* where there is a stabiliser."""
-    references = [("planned ZMP (`pattern.zmp`)", "zmp", "plan")]
+    """The ZMP error rows of one walk: against the plan, and against p* where there is a stabiliser;
+    the thesis's numbers on the row of its reference (p* for the position schemes when we have it)."""
+    references = [("planned ZMP (`pattern.zmp`)", "zmp")]
     if "zmp_desired" in result:
-        references.append(("stabiliser's p* (Eq. 2.30)", "zmp_desired", "p*"))
+        references.append(("stabiliser's p* (Eq. 2.30)", "zmp_desired"))
     thesis = THESIS_ZMP.get(walk.thesis)
-    thesis_reference = "plan" if walk.thesis is None or walk.thesis[0] == "TSID torque" else "p*"
-    if thesis_reference not in [reference for _, _, reference in references]:
-        thesis_reference = "plan"
+    position_scheme = walk.thesis is not None and walk.thesis[0] != "TSID torque"
+    thesis_key = "zmp_desired" if position_scheme and "zmp_desired" in result else "zmp"
     rows = []
-    for label, key, reference in references:
-        shown = thesis is not None and reference == thesis_reference
-        if fell(result):
-            ours = [fell(result)] * 2
-        else:
-            ours = [triple(statistics(result[key], axis)) for axis in (0, 1)]
-        theirs = [triple(thesis[axis]) if shown else "—" for axis in (0, 1)]
+    for label, key in references:
+        ours = [fell(result)] * 2 if fell(result) else [triple(statistics(result[key], axis)) for axis in (0, 1)]
+        theirs = [triple(thesis[axis]) if thesis is not None and key == thesis_key else "—" for axis in (0, 1)]
         rows.append([walk.name, label, ours[0], theirs[0], ours[1], theirs[1]])
     return rows
 
