@@ -257,7 +257,7 @@ def gait(walk: Walk, mask: np.ndarray) -> dict[str, object]:
                                ankle_columns(model, "right"), data["schedule.double_support"][mask].astype(bool),
                                swings["left"], swings["right"]),
         "force_jumps": force_jumps(walk, swings, mask),
-        "tick": tick_statistics(walk.durations[:int(mask.sum())], dt),
+        "tick": tick_statistics(walk.durations[:int(mask.sum()) - 1], dt),  # ticks 1 to the last before a fall
         "real_time_factor": len(mask) * dt / walk.wall,
         "final_base": data["device.q"][mask][-1, :2], "final_midpoint": plan.final_midpoint()[:2],
     }
