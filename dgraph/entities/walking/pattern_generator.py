@@ -11,6 +11,7 @@ import dgraph as dg
 from dgraph.control.status import Status
 from dgraph.entities.walking.footsteps import FootstepPlan
 from dgraph.entities.walking.lipm_mpc import GRAVITY, MAX_EDGES, LipmMpc, LipmTrajectory, MpcResult, pad_polygon
+from dgraph.entities.walking.swing import minimum_jerk
 from dgraph.signals.value_types import value_type
 
 WINDOW_EPSILON = 1e-9
@@ -89,6 +90,18 @@ class ZmpPatternGenerator(dg.Entity):
         zmp = [c - c_ddot / omega^2, z_g]                 (Eq. 2.22)  zmp_velocity = [c_dot - u / omega^2, 0]
         dcm = [c + c_dot / omega, z_g + h]                (Eq. 2.27)  dcm_velocity = [c_dot + c_ddot / omega, 0]
 
+    A CoM height ``h`` other than the estimate's ``h0`` at the first re-plan (tick ``t0``) is
+    reached in ``D = height_transition`` s, by minimum jerk ``s(x) = 10 x^3 - 15 x^4 + 6 x^5``,
+    ``x = (t - t0) dt / D`` (``D = 0``: at once)::
+
+        com_position_z = dcm_z = z_g + h + (h0 - h) (1 - s(x))
+        com_velocity_z = dcm_velocity_z = -(h0 - h) s'(x) / D      com_acceleration_z = -(h0 - h) s''(x) / D^2
+
+    while the MPC plans with ``h`` (``omega``) throughout: the transition is for the standing
+    start, within the plan's initial double support. A walk that strides further than the legs
+    reach from the robot's standing height needs it (graphs/talos_walk_60cm.yaml: the 60 cm walk
+    is out of TALOS's reach at half-sitting's 0.877 m).
+
     A failed re-plan (infeasible polygons, iteration limit, non-finite state) raises nothing: the
     tick is reported degraded and the previous plan is kept, evaluated at the time elapsed since
     it started; ``status`` says why. If the very first re-plan fails, the plan is the state
@@ -98,8 +111,8 @@ class ZmpPatternGenerator(dg.Entity):
     0.1), ``horizon`` (N, default 16), ``alpha``, ``beta``, ``gamma`` (weights of the CoM
     velocity, ZMP and jerk terms: 5, 1e3, 5e-4, jrl-walkgen's), ``margin`` (m the polygons
     shrink by, default 0.02; placo uses 0.025), ``com_height`` (h, m above the ground; None: the
-    estimated CoM's at the first tick), ``feedback`` (f, default 1), ``start`` (s, default 0),
-    ``dt`` (default: the graph's).
+    estimated CoM's at the first tick), ``height_transition`` (D, s, default 0), ``feedback`` (f,
+    default 1), ``start`` (s, default 0), ``dt`` (default: the graph's).
     Inputs: ``plan`` (FootstepPlan), ``estimated_com_position``, ``estimated_com_velocity`` (3).
     Outputs: ``com_plan`` (the :class:`ComPlan` followed), ``com_position``, ``com_velocity``,
     ``com_acceleration``, ``zmp``, ``zmp_velocity``, ``dcm``, ``dcm_velocity`` (3 each, world
@@ -116,6 +129,9 @@ class ZmpPatternGenerator(dg.Entity):
     margin = dg.Param(0.02, kind="float", minimum=0.0, maximum=1.0, doc="m the support polygons shrink by")
     com_height = dg.Param(None, kind="float", minimum=1e-3, maximum=100.0,
                           doc="CoM height above the ground in m (None: the estimate's at the first tick)")
+    height_transition = dg.Param(0.0, kind="float", minimum=0.0, maximum=1e3,
+                                 doc="s the CoM takes from the estimate's height at the first tick to com_height "
+                                     "(minimum jerk; 0: at once)")
     feedback = dg.Param(1.0, kind="float", minimum=0.0, maximum=1.0,
                         doc="share of the estimated CoM state in the re-plan's initial state (0: open loop)")
     start = dg.Param(0.0, kind="float", minimum=0.0, maximum=1e9, doc="s: plan time 0 is tick start/dt")
@@ -124,7 +140,7 @@ class ZmpPatternGenerator(dg.Entity):
         def __init__(
             self, name: str, *, period: float = 0.005, sampling: float = 0.1, horizon: int = 16, alpha: float = 5.0,
             beta: float = 1000.0, gamma: float = 0.0005, margin: float = 0.02, com_height: float | None = None,
-            feedback: float = 1.0, start: float = 0.0, dt: float | None = None,
+            height_transition: float = 0.0, feedback: float = 1.0, start: float = 0.0, dt: float | None = None,
         ) -> None: ...
 
     plan = dg.Input(dtype=FootstepPlan, doc="the footstep plan")
@@ -140,6 +156,7 @@ class ZmpPatternGenerator(dg.Entity):
         self._references_key: tuple[int, ComPlan] | None = None
         self._references = np.zeros((7, 3))
         self._ground = 0.0
+        self._height_change: tuple[int, float] = (0, 0.0)
 
     # -- re-planning ----------------------------------------------------------------------------
     def _window(self, t: int) -> int:
@@ -160,7 +177,7 @@ class ZmpPatternGenerator(dg.Entity):
         plan = self.plan(t)
         polygons = self._support_polygons(plan)
         measured = np.array([self.estimated_com_position(t), self.estimated_com_velocity(t)])
-        mpc = self._solver(plan, measured)
+        mpc = self._solver(plan, measured, t)
         planned = None if previous is None else self._planned_state(previous, t)
         initial = self._initial_state(measured, planned)
         times = (t * self.dt - self.start) + self.sampling * np.arange(1, self.horizon + 1)
@@ -208,9 +225,9 @@ class ZmpPatternGenerator(dg.Entity):
                 raise dg.ParamError(f"{self.name}: parameter 'margin': {exc}", entity=self.name) from None
         return self._polygons
 
-    def _solver(self, plan: FootstepPlan, measured: np.ndarray) -> LipmMpc:
-        """The MPC, made at the first re-plan (its CoM height: the parameter, else the estimate's
-        height above the ground then)."""
+    def _solver(self, plan: FootstepPlan, measured: np.ndarray, t: int) -> LipmMpc:
+        """The MPC, made at the first re-plan ``t`` (its CoM height: the parameter, else the
+        estimate's height above the ground then, whose difference to it the transition removes)."""
         if self._mpc is None:
             self._ground = 0.5 * (plan.initial_left[2, 3] + plan.initial_right[2, 3])
             height = self.com_height if self.com_height is not None else measured[0, 2] - self._ground
@@ -220,6 +237,7 @@ class ZmpPatternGenerator(dg.Entity):
             self._mpc = LipmMpc(height, sampling=self.sampling, horizon=self.horizon, alpha=self.alpha,
                                 beta=self.beta, gamma=self.gamma, max_edges=MAX_EDGES, gravity=GRAVITY)
             self._reference_maps(self._mpc.omega, height)
+            self._height_change = (t, measured[0, 2] - self._ground - height)
         return self._mpc
 
     def _reference_maps(self, omega: float, height: float) -> None:
@@ -251,23 +269,37 @@ class ZmpPatternGenerator(dg.Entity):
         if key is not None and key[0] == t and key[1] is com_plan:
             return self._references
         references = self._vertical.copy()
+        self._add_height_transition(t, references[:, 2])
         references[:, :2] = self._horizontal @ com_plan.trajectory.sample((t - com_plan.start_tick) * self.dt)
         self._references_key, self._references = (t, com_plan), references
         return references
 
+    def _add_height_transition(self, t: int, vertical: np.ndarray) -> None:
+        """Add to the seven vertical references what remains of the height transition at ``t``
+        (the class docstring's ``(h0 - h) (1 - s(x))`` and its derivatives)."""
+        first_tick, change = self._height_change
+        duration = self.height_transition
+        elapsed = (t - first_tick) * self.dt
+        if change == 0.0 or elapsed >= duration:
+            return
+        s, ds, dds = minimum_jerk(max(elapsed, 0.0) / duration)
+        vertical[[0, 5]] += change * (1.0 - s)
+        vertical[[1, 6]] -= change * ds / duration
+        vertical[2] -= change * dds / duration**2
+
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def com_position(self, t: int) -> np.ndarray:
-        """Planned CoM ``[c, z_g + h]``."""
+        """Planned CoM ``[c, z_g + h]`` (z in the height transition: the class docstring)."""
         return self._sample(t)[0]
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def com_velocity(self, t: int) -> np.ndarray:
-        """Planned CoM velocity ``[c_dot, 0]``."""
+        """Planned CoM velocity ``[c_dot, 0]`` (z in the height transition: the class docstring)."""
         return self._sample(t)[1]
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def com_acceleration(self, t: int) -> np.ndarray:
-        """Planned CoM acceleration ``[c_ddot, 0]``."""
+        """Planned CoM acceleration ``[c_ddot, 0]`` (z: as ``com_velocity``)."""
         return self._sample(t)[2]
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
@@ -282,12 +314,12 @@ class ZmpPatternGenerator(dg.Entity):
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def dcm(self, t: int) -> np.ndarray:
-        """Planned DCM ``[c + c_dot / omega, z_g + h]`` (Eq. 2.27)."""
+        """Planned DCM ``[c + c_dot / omega, z_g + h]`` (Eq. 2.27; z: the CoM's)."""
         return self._sample(t)[5]
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def dcm_velocity(self, t: int) -> np.ndarray:
-        """Its time derivative ``[c_dot + c_ddot / omega, 0]``."""
+        """Its time derivative ``[c_dot + c_ddot / omega, 0]`` (z: the CoM's)."""
         return self._sample(t)[6]
 
     @dg.output(shape=(), dtype="int", depends=("com_plan",))

@@ -238,6 +238,34 @@ def test_the_com_height_is_the_estimate_above_the_soles_unless_given():
     assert pattern.com_plan(0).trajectory.omega == pytest.approx(math.sqrt(GRAVITY / 0.85))
 
 
+def test_the_height_transition_lowers_the_com_by_minimum_jerk_and_leaves_the_horizontal_plan():
+    """From the estimate's 0.87 m to com_height 0.75 m in 0.4 s: the CoM and DCM heights are
+    0.75 + 0.12 (1 - s(x)), s(x) = 10 x^3 - 15 x^4 + 6 x^5, x = t dt / 0.4, their velocities and
+    the CoM acceleration its derivatives; at once (transition 0) the height is 0.75 from tick 0."""
+    runs = {}
+    for transition in (0.0, 0.4):
+        graph, pattern = generator(short_walk(), feedback=0.0, com_height=0.75, height_transition=transition)
+        rows = []
+        for t in range(600):
+            rows.append([getattr(pattern, name)(t) for name in REFERENCES])
+            graph.step()
+        runs[transition] = np.array(rows)  # (tick, reference, axis)
+    at_once, smooth = runs[0.0], runs[0.4]
+    np.testing.assert_allclose(smooth[:, :, :2], at_once[:, :, :2], rtol=0.0, atol=ROUNDING)
+    np.testing.assert_array_equal(at_once[:, 0, 2], 0.75)
+    x = np.minimum(np.arange(600) * DT / 0.4, 1.0)
+    expected = 0.75 + 0.12 * (1.0 - (10 * x**3 - 15 * x**4 + 6 * x**5))
+    for position, velocity in ((0, 1), (5, 6)):  # the CoM and the DCM
+        np.testing.assert_allclose(smooth[:, position, 2], expected, rtol=0.0, atol=1e-12)
+        assert smooth[:, velocity, 2].min() == pytest.approx(-1.875 * 0.12 / 0.4)  # at x = 1/2
+    assert smooth[0, 0, 2] == pytest.approx(0.87) and (smooth[400:, 0, 2] == 0.75).all()
+    for position, derivative, rounding in ((0, 1, 2e-5), (1, 2, 3e-4)):  # the trapezoid rule's dt^2/12 f'''
+        difference = np.diff(smooth[:, position, 2]) / DT
+        np.testing.assert_allclose(difference, 0.5 * (smooth[1:, derivative, 2] + smooth[:-1, derivative, 2]),
+                                   rtol=0.0, atol=rounding)
+    assert (smooth[400:, [1, 2, 6], 2] == 0.0).all() and (smooth[:, 3, 2] == 0.0).all()  # the ZMP stays on the ground
+
+
 def test_support_polygons_are_the_plans_at_every_time():
     plan = short_walk()
     polygons = SupportPolygons(plan, 0.02)
