@@ -42,13 +42,13 @@ def walking_graph(rrd: Path, name: str = "walking_view") -> tuple[dg.Graph, Walk
     g = dg.Graph(dt=0.001, name=name)
     g.add(Ticker("dev"))
     footsteps = g.add(FootstepPlanner("footsteps", start=START))
-    pattern = g.add(ZmpPatternGenerator("pattern", start=START, feedback=0.0))
+    pattern = g.add(ZmpPatternGenerator("pattern", feedback=0.0))
     plan = footsteps.plan(0)
     centre = 0.5 * (plan.sole.center(plan.initial_left) + plan.sole.center(plan.initial_right))
     pattern.estimated_com_position.set([centre[0], centre[1], 0.87])
     pattern.estimated_com_velocity.set(np.zeros(3))
     g.add(MeasuredZmp("zmp"))
-    view = g.add(WalkingView("walking", start=START, rrd_path=str(rrd)))
+    view = g.add(WalkingView("walking", rrd_path=str(rrd)))
     for source, target in (("footsteps.plan", "pattern.plan"), ("pattern.zmp", "zmp.planned"),
                            ("footsteps.plan", "walking.plan"), ("pattern.zmp", "walking.zmp_reference"),
                            ("zmp.zmp", "walking.zmp_measured"), ("pattern.com_position", "walking.com_reference"),

@@ -77,7 +77,7 @@ class WalkingView(StreamView, dg.Entity):
     footstep.
 
     Every ``decimation`` ticks (and at the first tick), on the ``tick`` and ``time`` timelines,
-    at plan time ``s = t dt - start`` (the :class:`~dgraph.entities.walking.FootstepPlanner`'s):
+    at plan time ``s = t dt - plan.start`` (the :class:`~dgraph.entities.walking.FootstepPlanner`'s ``start``):
 
     * ``<path>/support_polygon``: the convex hull of the corners of the stance soles
       (``plan.stance_placements(s)``; both feet in double support), projected on the ground (the
@@ -94,7 +94,7 @@ class WalkingView(StreamView, dg.Entity):
     ``send_columns`` per entity), and writes into the graph's shared recording
     (:func:`~dgraph.entities.recording.rerun_stream.open_stream_for`).
 
-    Parameters: ``decimation``, ``start`` (s: plan time 0 is tick ``start / dt``), ``path``
+    Parameters: ``decimation``, ``path``
     (entity path prefix), ``rerun`` (``save`` | ``spawn`` | ``serve`` | ``off``; not given: as the
     :class:`~dgraph.entities.recording.Recorder`'s, ``save`` if ``rrd_path`` is given, else the
     session's default, nothing for the library), ``rrd_path``, ``flush_every``, ``dt`` (default:
@@ -105,14 +105,13 @@ class WalkingView(StreamView, dg.Entity):
     """
 
     observes = True
-    start = dg.Param(0.0, kind="float", minimum=0.0, doc="time in s (t dt) at which the plan starts")
     path = dg.Param("world/walking", kind="str", doc="Rerun entity path prefix of the walk")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
             self, name: str, *, decimation: int = 20, rerun: Literal["off", "save", "spawn", "serve"] | None = None,
-            rrd_path: str | None = None, flush_every: int | None = None, start: float = 0.0,
-            path: str = "world/walking", dt: float | None = None,
+            rrd_path: str | None = None, flush_every: int | None = None, path: str = "world/walking",
+            dt: float | None = None,
         ) -> None: ...
 
     plan = dg.Input(dtype=FootstepPlan, doc="the footstep plan")
@@ -160,7 +159,7 @@ class WalkingView(StreamView, dg.Entity):
             self._staged = None
             return
         plan = self.plan(t)
-        strip, ground = self._support_polygon(plan, t * self.dt - self.start)
+        strip, ground = self._support_polygon(plan, plan.time(t * self.dt))
         points = {}
         for name in POINT_COLORS:
             inp = self.inputs[name]

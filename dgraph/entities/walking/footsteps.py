@@ -147,7 +147,9 @@ class Phase:
 @dataclass(frozen=True, eq=False)
 class FootstepPlan:
     """Where and when the feet step: the initial sole placements, the footsteps, the initial and
-    final double supports (s) and the sole shape; derived: the ``phases`` and the ``duration``.
+    final double supports (s), the sole shape and ``start``, the graph time (``t dt``, s) at which
+    the plan's time 0 falls (:meth:`time`; every entity that follows the plan reads it there);
+    derived: the ``phases`` and the ``duration``, in plan time.
 
     Phases: the initial double support ``[0, initial_double_support)``; per footstep ``i`` a single
     support (its foot swings, the other stands) then a double support of
@@ -173,6 +175,7 @@ class FootstepPlan:
     initial_double_support: float
     final_double_support: float
     sole: SoleShape = SoleShape()
+    start: float = 0.0
     phases: tuple[Phase, ...] = field(init=False)
     duration: float = field(init=False)
     _feet: tuple[dict[str, np.ndarray], ...] = field(init=False, repr=False)
@@ -186,6 +189,7 @@ class FootstepPlan:
         set_field(self, "steps", tuple(self.steps))
         set_field(self, "initial_double_support", float(self.initial_double_support))
         set_field(self, "final_double_support", float(self.final_double_support))
+        set_field(self, "start", float(self.start))
         self._validate()
         phases, feet = self._derive_phases()
         set_field(self, "phases", phases)
@@ -202,6 +206,8 @@ class FootstepPlan:
                 raise ValueError(f"{name}: {problem}")
         if not self.steps:
             raise ValueError("a plan needs at least one footstep")
+        if not self.start >= 0.0:
+            raise ValueError(f"start must be >= 0, got {self.start}")
         if not self.initial_double_support >= 0.0:
             raise ValueError(f"initial_double_support must be >= 0, got {self.initial_double_support}")
         if not self.final_double_support > 0.0:
@@ -317,6 +323,10 @@ class FootstepPlan:
         normals.setflags(write=False)
         return normals, offsets, inscribed_radius(normals, offsets)
 
+    def time(self, seconds: float) -> float:
+        """Plan time (s, what the phases count in) at graph time ``seconds`` (``t dt``): ``seconds - start``."""
+        return seconds - self.start
+
     def final_midpoint(self) -> np.ndarray:
         """(3,) the midpoint of the two final sole centres (where the robot ends)."""
         feet = self._feet[-1]
@@ -330,7 +340,8 @@ class FootstepPlan:
                            "double_support": s.double_support} for s in self.steps],
                 "initial_double_support": self.initial_double_support,
                 "final_double_support": self.final_double_support,
-                "sole": {"front": self.sole.front, "back": self.sole.back, "half_width": self.sole.half_width}}
+                "sole": {"front": self.sole.front, "back": self.sole.back, "half_width": self.sole.half_width},
+                "start": self.start}
 
     @classmethod
     def from_plain(cls, value: Any) -> FootstepPlan:
@@ -338,12 +349,13 @@ class FootstepPlan:
         (placements), ``steps`` (a list of footsteps: ``side``, a placement, ``single_support``,
         ``double_support``, optional for the last step, which takes ``final_double_support``),
         ``initial_double_support``, ``final_double_support``, optional ``sole`` (``front``,
-        ``back``, ``half_width``). A placement is a 4x4 nested list (``placement``), or
+        ``back``, ``half_width``) and ``start`` (s, default 0). A placement is a 4x4 nested list (``placement``), or
         ``position`` [x, y, z] with an optional ``yaw`` (rad, default 0). TypeError or ValueError
         (naming the step) on anything else."""
-        known = {"initial_left", "initial_right", "steps", "initial_double_support", "final_double_support", "sole"}
+        known = {"initial_left", "initial_right", "steps", "initial_double_support", "final_double_support", "sole",
+                 "start"}
         mapping = _mapping(value, "a footstep plan", known)
-        missing = sorted(known - {"sole"} - set(mapping))
+        missing = sorted(known - {"sole", "start"} - set(mapping))
         if missing:
             raise ValueError(f"a footstep plan needs {', '.join(missing)}")
         final = _number(mapping["final_double_support"], "final_double_support")
@@ -356,7 +368,8 @@ class FootstepPlan:
                             _mapping(mapping.get("sole", {}), "sole", {"front", "back", "half_width"}).items()})
         return cls(placement_from_plain(mapping["initial_left"], "initial_left"),
                    placement_from_plain(mapping["initial_right"], "initial_right"), tuple(steps),
-                   _number(mapping["initial_double_support"], "initial_double_support"), final, sole)
+                   _number(mapping["initial_double_support"], "initial_double_support"), final, sole,
+                   _number(mapping.get("start", 0.0), "start"))
 
 
 def footstep_from_plain(value: Any, index: int, single_support: float | None = None,

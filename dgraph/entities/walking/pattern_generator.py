@@ -60,7 +60,7 @@ class ZmpPatternGenerator(dg.Entity):
     """The walking pattern generator: the LIPM MPC of :mod:`~dgraph.entities.walking.lipm_mpc`
     re-planned every ``period`` seconds along a footstep plan, its trajectory sampled every tick.
 
-    Plan time: ``tau = t dt - start`` (the footstep planner's). At the first tick, then at every
+    Plan time: ``tau = t dt - plan.start`` (the footstep planner's ``start``). At the first tick, then at every
     tick where ``tau`` crosses a multiple of ``period`` (thesis: the WPG re-plans its whole
     horizon every 5 ms, L1552-1554), the MPC plans ``N = horizon`` samples of ``T = sampling``
     from the state ``x0 = [c0, c_dot0, c_ddot0]`` (per horizontal axis)::
@@ -78,7 +78,7 @@ class ZmpPatternGenerator(dg.Entity):
     sampled MPC), the CoM velocity reference 0: the plan carries none, and the term
     ``alpha ||c_dot||^2`` only damps (alpha = 5 against beta = 1e3; measured on the 20 cm and
     60 cm straight walks re-planned every 5 ms, the RMS ZMP error is 13.3 and 39.7 mm along x
-    with it and with a velocity reference averaged over a stride alike). Before ``start`` and
+    with it and with a velocity reference averaged over a stride alike). Before the plan's start and
     after the plan's end the references are constant and the polygons the double support's: the
     MPC plans standing.
 
@@ -112,7 +112,7 @@ class ZmpPatternGenerator(dg.Entity):
     velocity, ZMP and jerk terms: 5, 1e3, 5e-4, jrl-walkgen's), ``margin`` (m the polygons
     shrink by, default 0.02; placo uses 0.025), ``com_height`` (h, m above the ground; None: the
     estimated CoM's at the first tick), ``height_transition`` (D, s, default 0), ``feedback`` (f,
-    default 1), ``start`` (s, default 0), ``dt`` (default: the graph's).
+    default 1), ``dt`` (default: the graph's).
     Inputs: ``plan`` (FootstepPlan), ``estimated_com_position``, ``estimated_com_velocity`` (3).
     Outputs: ``com_plan`` (the :class:`ComPlan` followed), ``com_position``, ``com_velocity``,
     ``com_acceleration``, ``zmp``, ``zmp_velocity``, ``dcm``, ``dcm_velocity`` (3 each, world
@@ -134,13 +134,12 @@ class ZmpPatternGenerator(dg.Entity):
                                      "(minimum jerk; 0: at once)")
     feedback = dg.Param(1.0, kind="float", minimum=0.0, maximum=1.0,
                         doc="share of the estimated CoM state in the re-plan's initial state (0: open loop)")
-    start = dg.Param(0.0, kind="float", minimum=0.0, maximum=1e9, doc="s: plan time 0 is tick start/dt")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
             self, name: str, *, period: float = 0.005, sampling: float = 0.1, horizon: int = 16, alpha: float = 5.0,
             beta: float = 1000.0, gamma: float = 0.0005, margin: float = 0.02, com_height: float | None = None,
-            height_transition: float = 0.0, feedback: float = 1.0, start: float = 0.0, dt: float | None = None,
+            height_transition: float = 0.0, feedback: float = 1.0, dt: float | None = None,
         ) -> None: ...
 
     plan = dg.Input(dtype=FootstepPlan, doc="the footstep plan")
@@ -159,16 +158,17 @@ class ZmpPatternGenerator(dg.Entity):
         self._height_change: tuple[int, float] = (0, 0.0)
 
     # -- re-planning ----------------------------------------------------------------------------
-    def _window(self, t: int) -> int:
-        """The index of the re-plan window of tick ``t``."""
-        return math.floor((t * self.dt - self.start) / self.period + WINDOW_EPSILON)
+    def _window(self, plan: FootstepPlan, t: int) -> int:
+        """The index of the re-plan window of tick ``t`` (in ``plan``'s time)."""
+        return math.floor(plan.time(t * self.dt) / self.period + WINDOW_EPSILON)
 
     @dg.output(dtype=ComPlan, depends=("t", "plan", "estimated_com_position", "estimated_com_velocity"),
                on_demand=True)
     def com_plan(self, t: int) -> ComPlan:
         """The plan followed at ``t``: a new one at a re-plan tick, else the committed one."""
         committed = self._committed
-        if committed is not None and self._window(t) == self._window(committed.replan_tick):
+        plan = self.plan(t)
+        if committed is not None and self._window(plan, t) == self._window(plan, committed.replan_tick):
             return committed
         return self._replan(t, committed)
 
@@ -180,7 +180,7 @@ class ZmpPatternGenerator(dg.Entity):
         mpc = self._solver(plan, measured, t)
         planned = None if previous is None else self._planned_state(previous, t)
         initial = self._initial_state(measured, planned)
-        times = (t * self.dt - self.start) + self.sampling * np.arange(1, self.horizon + 1)
+        times = plan.time(t * self.dt) + self.sampling * np.arange(1, self.horizon + 1)
         shift = 0 if previous is None else round((t - previous.start_tick) * self.dt / self.sampling)
         result = mpc.solve(initial, plan.zmp_reference(times), np.zeros((self.horizon, 2)), polygons.at(times),
                            tick=t, shift=shift)

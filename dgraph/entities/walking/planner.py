@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -59,7 +60,8 @@ class FootstepPlanner(dg.Entity):
     ``explicit`` (``footsteps``: a list of ``{side, position: [x, y, z], yaw (rad, default 0),
     single_support?, double_support?}``, the durations defaulting to the parameters, the last
     step's double support to ``final_double_support``). Plan time ``s = t dt - start``: the
-    plan's phases are in plan time, tick ``start / dt`` is its time 0.
+    plan's phases are in plan time, tick ``start / dt`` is its time 0; the plan carries
+    ``start``, so the entities that follow it (scheduler, pattern generator, swings, view) agree.
 
     Parameters: ``walk``, ``steps``, ``length`` (m; default: the builder's, 0.2 straight, 0
     turning; required for lateral), ``width`` (m between the feet, default: the robot's, 0.17 m
@@ -115,7 +117,7 @@ class FootstepPlanner(dg.Entity):
         for param in ("left_frame", "right_frame"):
             frame_id(model, getattr(self, param), self.name, param, label)
         self.initial_left, self.initial_right = sole_placements(model, self.left_frame, self.right_frame)
-        self._plan = self._build()
+        self._plan = dataclasses.replace(self._build(), start=self.start)
 
     def _refuse(self, param: str, reason: str) -> dg.ParamError:
         return dg.ParamError(f"{self.name} ({self.type_name}): parameter {param!r}: {reason}", entity=self.name)
@@ -171,4 +173,4 @@ class FootstepPlanner(dg.Entity):
     @dg.output(shape=(), depends=("t",))
     def time(self, t: int) -> float:
         """Plan time in s: ``t dt - start``."""
-        return t * self.dt - self.start
+        return self._plan.time(t * self.dt)

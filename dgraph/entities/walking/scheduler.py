@@ -36,7 +36,7 @@ class Schedule:
 @dg.register
 class ContactScheduler(dg.Entity):
     """The contact schedule of a footstep plan (walking notes §1.9, item 2: init DS -> SS -> DS
-    -> ... -> final DS), at plan time ``s = t dt - start``, for each foot:
+    -> ... -> final DS), at plan time ``s = t dt - plan.start``, for each foot:
 
     - ``{side}_contact``: the foot is on the ground in the plan's phase at ``s``, so its contact is
       in the QP (Contact6d ``active``);
@@ -61,7 +61,7 @@ class ContactScheduler(dg.Entity):
     A zero-length double support has no ramp (the contact changes at once). Both ramps lie in
     double supports, and a foot on the ground in single support has scales 1.
 
-    Parameters: ``start`` (s; tick ``start / dt`` is plan time 0; default 0), ``transition`` (s,
+    Parameters: ``transition`` (s,
     default 0.1: no more than any double support > 0 of the plan, else a ParamError at the
     first tick that reads the plan), ``force_weight_scale_start`` (``W``, default 1e3),
     ``swing_weight`` (default 2e3: twice the CoM task's 1e3 of Table 4.2, as the feet tracking
@@ -69,7 +69,6 @@ class ContactScheduler(dg.Entity):
     Input: ``plan`` (FootstepPlan). Everything is computed once per tick (and plan).
     """
 
-    start = dg.Param(0.0, kind="float", minimum=0.0, doc="time in s (t dt) at which the plan starts")
     transition = dg.Param(0.1, kind="float", minimum=0.0, doc="duration in s of the contact removal and creation "
                                                               "ramps (<= every double support > 0)")
     force_weight_scale_start = dg.Param(1e3, kind="float", minimum=1.0,
@@ -78,7 +77,7 @@ class ContactScheduler(dg.Entity):
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, start: float = 0.0, transition: float = 0.1, force_weight_scale_start: float = 1000.0,
+            self, name: str, *, transition: float = 0.1, force_weight_scale_start: float = 1000.0,
             swing_weight: float = 2000.0, dt: float | None = None,
         ) -> None: ...
 
@@ -106,7 +105,7 @@ class ContactScheduler(dg.Entity):
             return last[2]
         if plan is not self._checked:
             self._check(plan)
-        time = t * self.dt - self.start
+        time = plan.time(t * self.dt)
         index, phase, progress = plan.phase_at(time)
         double = phase.kind == "double"
         lifting = touched = None

@@ -99,15 +99,14 @@ class SwingTrajectory(dg.Entity):
     acceleration ``[p_dot*, omega*]``, ``[p_ddot*, omega_dot*]``, world axes: the conventions
     here).
 
-    Plan time ``s = t dt - start``. While the foot swings (the single support of one of its
+    Plan time ``s = t dt - plan.start``. While the foot swings (the single support of one of its
     footsteps, progress ``x``): the :class:`SwingPath` from its lift-off placement to its
     footstep's placement over the single-support duration, ``height`` m above the higher of the
     two at mid-swing; otherwise the placement it stands on
     (:meth:`~dgraph.entities.walking.footsteps.FootstepPlan.foot_placement`), at rest.
 
     Parameters: ``side`` (``left`` or ``right``), ``height`` (m, default 0.05: the walking notes'
-    §1.4 gap-filler, TSID's TALOS walking configuration; the thesis gives none), ``start`` (s:
-    tick ``start / dt`` is the plan's time 0), ``dt``.
+    §1.4 gap-filler, TSID's TALOS walking configuration; the thesis gives none), ``dt``.
     Input: ``plan`` (FootstepPlan).
     Outputs: ``position`` (3), ``orientation`` (quaternion xyzw), ``velocity`` (6, ``[p_dot,
     omega]``), ``acceleration`` (6, ``[p_ddot, omega_dot]``), world axes.
@@ -116,12 +115,10 @@ class SwingTrajectory(dg.Entity):
     side = dg.Param(kind="str", choices=("left", "right"), doc="the foot: left or right")
     height = dg.Param(0.05, kind="float", minimum=0.0, doc="swing height in m above the higher of lift-off and "
                                                            "touch-down, at mid-swing")
-    start = dg.Param(0.0, kind="float", minimum=0.0, doc="time in s (t dt) at which the plan starts")
     dt = dg.Param(None, kind="float", minimum=1e-6, doc="tick period in s (default: the graph's dt)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
-            self, name: str, *, side: Literal["left", "right"], height: float = 0.05, start: float = 0.0,
-            dt: float | None = None,
+            self, name: str, *, side: Literal["left", "right"], height: float = 0.05, dt: float | None = None,
         ) -> None: ...
 
     plan = dg.Input(dtype=FootstepPlan, doc="the footstep plan")
@@ -139,7 +136,7 @@ class SwingTrajectory(dg.Entity):
             return last[2]
         if last is None or last[1] is not plan:
             self._paths = {}
-        time = t * self.dt - self.start
+        time = plan.time(t * self.dt)
         index, phase, progress = plan.phase_at(time)
         if phase.swing_side == self.side:
             path = self._paths.get(index)

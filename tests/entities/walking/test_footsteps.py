@@ -210,6 +210,9 @@ def test_plain_data_round_trip_and_errors():
                          {"side": "right", "position": [0.2, -0.085, 0], "yaw": 0.1, "single_support": 0.8}]}
     plan = FootstepPlan.from_plain(written)
     assert plan.final_double_support == 1.5 and plan.steps[-1].double_support == 1.5
+    assert plan.start == 0.0 and FootstepPlan.from_plain({**written, "start": 2.5}).time(3.0) == pytest.approx(0.5)
+    with pytest.raises(ValueError, match="start must be >= 0"):
+        FootstepPlan.from_plain({**written, "start": -1})
     assert yaw_of(plan.steps[1].placement) == pytest.approx(0.1) and plan.duration == pytest.approx(4.3)
     bad_side = {**written, "steps": [{**written["steps"][0], "side": "middle"}, written["steps"][1]]}
     with pytest.raises(ValueError, match="step 0: side must be"):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -91,7 +92,7 @@ def test_it_replans_at_the_first_tick_and_where_the_plan_time_crosses_a_period(m
     monkeypatch.setattr(LipmMpc, "solve", counted)
     for start, expected in ((0.0, list(range(0, 1000, 5))), (0.0023, [0, *range(3, 1000, 5)])):
         solves.clear()
-        graph, pattern = generator(short_walk(), start=start)
+        graph, pattern = generator(dataclasses.replace(short_walk(), start=start))
         replans = set()
         for t in range(1000):
             for name in REFERENCES:  # reading every output does not re-plan again
@@ -214,9 +215,9 @@ def test_outputs_are_the_lipm_relations_and_the_velocities_the_derivatives():
 
 
 def test_it_stands_before_the_start_and_after_the_end():
-    plan = short_walk()
+    plan = dataclasses.replace(short_walk(), start=2.0)
     midpoint = 0.5 * (plan.sole.center(LEFT) + plan.sole.center(RIGHT))
-    graph, pattern = generator(plan, np.array([*midpoint[:2], HEIGHT]), start=2.0)
+    graph, pattern = generator(plan, np.array([*midpoint[:2], HEIGHT]))
     for t in range(round((2.0 + plan.duration + 4.0) / DT)):
         if t < 300:  # more than a horizon before the start
             np.testing.assert_allclose(pattern.com_position(t)[:2], midpoint[:2], atol=1e-6)

@@ -64,6 +64,7 @@ def test_the_default_walk_and_the_plan_time():
     start_x = plan.initial_left[0, 3]
     assert [s.placement[0, 3] - start_x for s in plan.steps] == pytest.approx([0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.2])
     assert plan.final_midpoint()[0] - SoleShape().center(plan.initial_left)[0] == pytest.approx(1.2, abs=1e-9)
+    assert plan.start == 0.5  # the plan carries it to the entities that follow it
     assert planner.time(0) == pytest.approx(-0.5) and planner.time(1500) == pytest.approx(1.0)
     graph.run(ticks=20)
     assert planner.plan(20) is plan and planner.outputs["plan"].count == 1

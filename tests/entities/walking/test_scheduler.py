@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -37,7 +38,7 @@ def timeline(entity: ContactScheduler, ticks: int) -> dict[str, np.ndarray]:
 def test_the_20cm_walk_switches_contacts_with_ramps_that_end_and_start_at_the_switches():
     plan = straight_walk(LEFT0, RIGHT0)
     transition, start = 0.1, 0.3
-    entity = scheduler(plan, start=start, transition=transition)
+    entity = scheduler(dataclasses.replace(plan, start=start), transition=transition)
     ticks = round((plan.duration + start + 0.5) / DT)
     out = timeline(entity, ticks)
     ramp_step = 1.875 * DT / transition  # the minimum-jerk profile's largest slope, per tick

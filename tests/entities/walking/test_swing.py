@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -88,10 +89,10 @@ def test_velocity_and_acceleration_are_the_time_derivatives():
         assert np.abs((after.velocity - before.velocity) / (2 * h) - now.acceleration).max() < 1e-6 * acceleration
 
 
-def plan_graph(**params):
+def plan_graph(start: float = 0.0, **params):
     graph = dg.Graph(dt=0.001)
     graph.add(Ticker("clock"))
-    plan = straight_walk(LEFT0, RIGHT0, steps=2, initial_double_support=0.5)
+    plan = dataclasses.replace(straight_walk(LEFT0, RIGHT0, steps=2, initial_double_support=0.5), start=start)
     feet = {side: graph.add(SwingTrajectory(f"{side}_foot", side=side, **params)) for side in ("left", "right")}
     for foot in feet.values():
         foot.plan.set(plan)
