@@ -322,7 +322,8 @@ def plot_walk(path: Path, walk: Walk, result: dict[str, object]) -> None:
 def open_loop_pattern(plan: FootstepPlan, initial_com: np.ndarray, params: dict[str, object],
                       dt: float) -> dict[str, object]:
     """Our ZmpPatternGenerator with the walk's ``params`` and ``feedback = 0`` on ``plan`` from
-    ``initial_com`` at rest, sampled at every tick to the plan's end; its solve times and settings."""
+    ``initial_com`` at rest, sampled at every tick from the plan's start to its end (``time``: plan
+    time); its solve times and settings."""
     graph = dg.Graph(dt=dt)
     pattern = graph.add(ZmpPatternGenerator("pattern", **{**params, "feedback": 0.0}))
     pattern.plan.set(plan)
@@ -331,12 +332,14 @@ def open_loop_pattern(plan: FootstepPlan, initial_com: np.ndarray, params: dict[
     names = ("com_position", "com_acceleration", "zmp", "dcm")
     samples: dict[str, list] = {name: [] for name in names}
     solve_times = []
-    for t in range(round(plan.duration / dt) + 1):
-        for name in names:
-            samples[name].append(getattr(pattern, name)(t).copy())
+    first = round(plan.start / dt)  # before it, the generator plans standing: stepped, not sampled
+    for t in range(first + round(plan.duration / dt) + 1):
         com_plan = pattern.com_plan(t)
         if com_plan.replan_tick == t:
             solve_times.append(com_plan.solve_time)
+        if t >= first:
+            for name in names:
+                samples[name].append(getattr(pattern, name)(t).copy())
         graph.step()
     return {"time": np.arange(len(samples["zmp"])) * dt, **{name: np.array(values) for name, values in samples.items()},
             "plan_time": solve_times[0], "replan_times": np.array(solve_times[1:]),
@@ -345,7 +348,8 @@ def open_loop_pattern(plan: FootstepPlan, initial_com: np.ndarray, params: dict[
 
 def placo_plan(plan: FootstepPlan, initial_com: np.ndarray, margin: float, out: Path,
                tag: str) -> dict[str, np.ndarray]:
-    """placo's plan of ``plan`` (bench/peer_placo.py in .venv-placo), the same CoM height, margin and start."""
+    """placo's plan of ``plan`` (bench/peer_placo.py in .venv-placo) from ``initial_com`` at rest,
+    its LIPM at that CoM's height above the ground, the support polygons shrunk by ``margin``."""
     ground = 0.5 * (plan.initial_left[2, 3] + plan.initial_right[2, 3])
     request = {**plan.to_plain(), "com_height": float(initial_com[2] - ground), "margin": margin,
                "initial_com": initial_com.tolist()}
@@ -380,9 +384,10 @@ def compare_planners(walks: list[Walk], results: dict[str, dict], out: Path) -> 
         if key in comparisons:
             comparisons[key]["walks"].append(walk.name)
             continue
-        initial_com = results[walk.name]["com"][0]
+        initial_com = results[walk.name]["com"][round(walk.plan.start / walk.dt)]
         ours = open_loop_pattern(walk.plan, initial_com, walk.pattern_params, walk.dt)
-        placo = placo_plan(walk.plan, initial_com, ours["margin"], out, walk.name)
+        lipm_com = np.r_[initial_com[:2], ours["com_position"][-1, 2]]  # at our LIPM's height (com_height)
+        placo = placo_plan(walk.plan, lipm_com, ours["margin"], out, walk.name)
         comparisons[key] = {"walks": [walk.name], "ours": ours, "placo": placo,
                             "quality": {"ours": plan_quality(ours, walk.plan), "placo": plan_quality(placo, walk.plan)}}
         print(f"planners on the plan of {walk.name}: done", flush=True)
@@ -640,8 +645,9 @@ def peer_text(comparisons: list[dict[str, object]], cal: dict[str, object]) -> s
     if not comparisons:
         return "Not run (`--no-placo`, or no walk ran).\n"
     text = ["Both planners plan the same footstep plan (the walk graph's `footsteps.plan`, given to "
-            "bench/peer_placo.py as `FootstepPlan.to_plain()` JSON), from the true CoM of the walk's first tick at "
-            "rest, with the same CoM height above the ground and the same margin of the support polygons. Ours is "
+            "bench/peer_placo.py as `FootstepPlan.to_plain()` JSON), from the walk's true CoM (x, y) at the plan's "
+            "start, at rest, with our LIPM's CoM height above the ground (the pattern generator's `com_height`, or "
+            "the standing CoM's) and the same margin of the support polygons. Ours is "
             "the ZmpPatternGenerator with the walk graph's parameters run open loop (`feedback = 0`, no robot), as "
             "placo's own loop is (each re-plan from its own trajectory), sampled every 1 ms to the plan's end. Plan "
             "times are ours `ComPlan.solve_time` (QP assembly + ProxQP) and placo's `plan` / `replan` calls, "
