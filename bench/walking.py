@@ -289,6 +289,12 @@ def draw_plan(axes: plt.Axes, plan: FootstepPlan) -> None:
                   linewidth=0.8, zorder=1)
 
 
+def stretch_across(axes: plt.Axes) -> int:
+    """The whole factor y is stretched by in a top view so that it is at least a quarter as tall as wide."""
+    (x_low, x_high), (y_low, y_high) = axes.get_xlim(), axes.get_ylim()
+    return max(1, round(0.25 * (x_high - x_low) / (y_high - y_low)))
+
+
 def plot_walk(path: Path, walk: Walk, result: dict[str, object]) -> None:
     """The walk's figure: the top view above, x and y over time below."""
     mask, data = result["mask"], walk.data
@@ -307,9 +313,11 @@ def plot_walk(path: Path, walk: Walk, result: dict[str, object]) -> None:
         top.plot(xy[:, 0], xy[:, 1], label=label, **style)
         along.plot(t, xy[:, 0], **style)
         across.plot(t, xy[:, 1], **style)
-    top.set(aspect="equal", xlabel="x (m)", ylabel="y (m)", title=f"{walk.name}: top view" + (
+    stretch = stretch_across(top)
+    top.set(aspect=stretch, xlabel="x (m)", ylabel="y (m)", title=f"{walk.name}: top view" + (
+        f", y stretched ×{stretch}" if stretch > 1 else "") + (
         f" (fell at {result['fall']:.2f} s)" if result["fall"] is not None else ""))
-    top.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=6, fontsize=9)
+    top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
     along.set(xlabel="time (s)", ylabel="x (m)", title="along the walk")
     across.set(xlabel="time (s)", ylabel="y (m)", title="across the walk")
     for axes in (top, along, across):
