@@ -21,7 +21,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 from line_plot import line_plot  # bench/, the script's folder
 
 import dgraph as dg
@@ -39,6 +38,7 @@ from dgraph.evaluation import (
     tracking_error,
 )
 from dgraph.files import declared_entities, parse, read_text
+from dgraph_sim.truth import true_com_and_frames
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -125,15 +125,7 @@ def run(name: str, scenario: str, out: Path) -> tuple[dict[str, np.ndarray], lis
 
 def ground_truth(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """True CoM and sole positions (ticks x 3, ticks x 2 x 3) from the simulator's configurations."""
-    model = load_model("talos")
-    data = model.createData()
-    soles = [model.getFrameId(f) for f in SOLES]
-    com, feet = [], []
-    for qi in q:
-        com.append(pin.centerOfMass(model, data, qi).copy())
-        pin.updateFramePlacements(model, data)
-        feet.append([data.oMf[f].translation.copy() for f in soles])
-    return np.array(com), np.array(feet)
+    return true_com_and_frames(q, SOLES)
 
 
 def evaluate(data: dict[str, np.ndarray], durations: list[float], wall: float, dt: float) -> dict[str, object]:

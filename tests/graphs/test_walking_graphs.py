@@ -14,29 +14,16 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 import dgraph as dg
 from dgraph.entities.robot import load_model
 from dgraph.evaluation import cost_of_transport, mechanical_energy, path_length
+from dgraph_sim.truth import true_com_and_frames
 
 ROOT = Path(__file__).resolve().parents[2]
 GRAVITY = 9.81
 SOLES = ("left_sole_link", "right_sole_link")
-
-
-def ground_truth(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The true CoM (ticks x 3) and sole positions (ticks x 2 x 3) from the simulator's configurations."""
-    model = load_model("talos")
-    data = model.createData()
-    frames = [model.getFrameId(f) for f in SOLES]
-    com, soles = [], []
-    for qi in q:
-        com.append(pin.centerOfMass(model, data, qi).copy())
-        pin.updateFramePlacements(model, data)
-        soles.append([data.oMf[f].translation.copy() for f in frames])
-    return np.array(com), np.array(soles)
 
 
 def robot_mass() -> float:
@@ -52,7 +39,7 @@ def run_walk(name: str, folder: Path) -> tuple[dg.Graph, dict[str, np.ndarray], 
     with graph:
         graph.run(duration=graph.duration, progress=False)
     data = graph["recorder"].data()
-    com, soles = ground_truth(data["device.q"])
+    com, soles = true_com_and_frames(data["device.q"], SOLES)
     return graph, data, com, soles
 
 
