@@ -58,7 +58,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from calibration import BusyMeter, calibrate, calibration_line, in_loops, single_threaded_env  # noqa: E402
-from compare_schemes import ground_truth, timed  # noqa: E402  (bench/, the script's folder)
+from compare_schemes import timed  # noqa: E402  (bench/, the script's folder)
 from tqdm import tqdm  # noqa: E402
 
 import dgraph as dg  # noqa: E402
@@ -81,6 +81,7 @@ from dgraph.evaluation import (  # noqa: E402
     tick_statistics,
     tracking_error,
 )
+from dgraph_sim.truth import true_com_and_frames  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 WALKS = {  # graph -> (the thesis's scheme, walk)
@@ -213,7 +214,7 @@ def evaluate(walk: Walk) -> dict[str, object]:
     """Every metric of one walk, on the ticks before a fall."""
     data = walk.data
     mask, fall = before_fall(data["device.fallen"]), first_fall(data["device.fallen"])
-    com, soles = ground_truth(data["device.q"])
+    com, soles = true_com_and_frames(data["device.q"], [f"{side}_sole_link" for side in SIDES])
     result = {"fall": None if fall is None else fall * walk.dt, "mask": mask, "weight": robot_mass() * GRAVITY,
               "com": com, "dcm": measured_dcm(walk, com)}
     result.update(tracking(walk, com, soles, mask))
