@@ -486,6 +486,62 @@ def test_a_chain_holds_at_most_max_extends_files(tmp_path):
         dg.load(tmp_path / f"f{MAX_EXTENDS}.yaml")  # 9 files
 
 
+LAYER_A = ("extends: base.yaml\nname: a\nentities:\n  bias: {type: Constant, params: {value: [0.5, 0.5]}}\n"
+           "plugs: [bias.output -> err.in0]\nset: {k.gain: 3.0}\nrecord: [bias.output]\n")
+LAYER_B = ("extends: base.yaml\nname: b\nremove: {record: [err.output]}\n"
+           "entities:\n  sum: {type: Add, params: {size: 2}}\nplugs: [k.output -> sum.in0]\nset: {k.gain: 5.0}\n")
+
+
+def test_a_file_extending_several_lays_their_chains_in_order_their_shared_base_once(tmp_path):
+    write(tmp_path, "base.yaml", COMPOSED_BASE)
+    write(tmp_path, "a.yaml", LAYER_A)
+    write(tmp_path, "b.yaml", LAYER_B)
+    top = write(tmp_path, "top.yaml", "extends: [a.yaml, b.yaml]\nname: top\n")
+    g = dg.load(top)  # base, a, b, top: base's records once (a second base.yaml would record dev.q twice)
+    assert list(g.entities) == ["dev", "ref", "err", "k", "bias", "sum", "recorder"]
+    assert ("bias.output", "err.in0") in g.plugs() and ("k.output", "sum.in0") in g.plugs()
+    assert g["k.gain"].value == 5.0 and g.name == "top"  # b's setting, laid over a's
+    assert g["recorder"].signals == ["dev.q", "k.output", "bias.output"]  # b removed what the base recorded
+    top.write_text("extends: [b.yaml, a.yaml]\n")
+    assert dg.load(top)["k.gain"].value == 3.0
+
+
+def test_a_mistake_in_a_list_of_bases_is_located_at_its_item(tmp_path):
+    write(tmp_path, "base.yaml", COMPOSED_BASE)
+    write(tmp_path, "a.yaml", LAYER_A)
+    write(tmp_path, "loop.yaml", "extends: [base.yaml, top.yaml]\n")
+    top = tmp_path / "top.yaml"
+    for extends, fragment in (("[a.yaml, notes.txt]", "only extend a .yaml graph file, not 'notes.txt'"),
+                              ("[a.yaml, missing.yaml]", "cannot extend 'missing.yaml'"),
+                              ("[a.yaml, loop.yaml]", "a cycle")):
+        top.write_text(f"name: top\nextends: {extends}\n")
+        with pytest.raises(dg.GraphFileError, match=fragment) as info:
+            dg.load(top)
+        where = (info.value.file, info.value.line, info.value.key)
+        assert where == ((str(top), 2, "extends.1") if "cycle" not in fragment else
+                         (str(tmp_path / "loop.yaml"), 1, "extends.1")), str(info.value)
+    top.write_text("name: top\nextends: []\n")
+    with pytest.raises(dg.GraphFileError, match="extends") as info:
+        dg.load(top)
+    assert info.value.line == 2
+
+
+def test_a_graph_of_files_holds_at_most_max_extends_distinct_files(tmp_path):
+    from dgraph.files import MAX_EXTENDS
+
+    write(tmp_path, "f0.yaml", "entities:\n  k: {type: Gain, params: {size: 1}}\n")
+    for i in range(1, MAX_EXTENDS - 1):  # f1 .. f6 extend f0, each with its own setting
+        write(tmp_path, f"f{i}.yaml", f"extends: f0.yaml\nset: {{k.gain: {float(i)}}}\n")
+    bases = ", ".join(f"f{i}.yaml" for i in range(1, MAX_EXTENDS - 1))
+    top = write(tmp_path, "top.yaml", f"extends: [{bases}]\n")
+    assert dg.load(top)["k.gain"].value == MAX_EXTENDS - 2  # 8 files: the top, f0 once, f1 .. f6
+    write(tmp_path, f"f{MAX_EXTENDS - 1}.yaml", "extends: f0.yaml\n")
+    top.write_text(f"extends: [{bases}, f{MAX_EXTENDS - 1}.yaml]\n")
+    with pytest.raises(dg.GraphFileError, match=f"a chain of more than {MAX_EXTENDS} files") as info:
+        dg.load(top)
+    assert info.value.key == f"extends.{MAX_EXTENDS - 2}"
+
+
 def test_a_redefinition_gives_its_parameters_over_the_settings_of_the_files_below(tmp_path):
     write(tmp_path, "base.yaml", "entities:\n  c: {type: Constant, params: {value: [1.0]}}\n"
                                  "  k: {type: Gain, params: {size: 1}}\nset:\n  c.value: [2.0]\n  k.gain: 3.0\n")
@@ -700,14 +756,18 @@ def test_no_two_graph_files_share_more_than_ten_consecutive_lines():
             assert run <= 10, f"{a.name} and {b.name} share {run} consecutive lines: compose them from a base"
 
 
-def chain(path: Path) -> list[dict]:
-    """The plain data of a file and of every file it extends."""
+def chain(path: Path, seen: set[Path] | None = None) -> list[dict]:
+    """The plain data of a file and of every file it extends, each once."""
     import yaml
 
-    out = [yaml.safe_load(path.read_text())]
-    while "extends" in out[-1]:
-        path = path.parent / out[-1]["extends"]
-        out.append(yaml.safe_load(path.read_text()))
+    seen = set() if seen is None else seen
+    seen.add(path.resolve())
+    data = yaml.safe_load(path.read_text())
+    extends = data.get("extends", [])
+    out = [data]
+    for name in [extends] if isinstance(extends, str) else extends:
+        if (path.parent / name).resolve() not in seen:
+            out += chain(path.parent / name, seen)
     return out
 
 

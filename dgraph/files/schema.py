@@ -40,7 +40,8 @@ SCHEMA: dict[str, Any] = {
         "plugs": {"type": "array", "items": {"type": "string", "pattern": PLUG_PATTERN}},
         "set": _SETTINGS,
         "record": _SIGNALS,
-        "extends": {"type": "string", "minLength": 1},
+        "extends": {"anyOf": [{"type": "string", "minLength": 1},
+                              {"type": "array", "minItems": 1, "items": {"type": "string", "minLength": 1}}]},
         "remove": {
             "type": "object",
             "additionalProperties": False,
