@@ -570,19 +570,22 @@ def planner_table(comparison: dict[str, object], cal: dict[str, object]) -> str:
 DIFFERENCES = """\
 - **Simulator**: the thesis ran Gazebo (L4672); these walks run MuJoCo (its contact model, soft
   constraints, and ankle F/T sensors read from it), so the numbers are an envelope, not targets.
-- **Pattern generator**: the thesis's is the NMPC of Naveau et al. (jrl-walkgen, CoM jerk and two
-  footsteps as variables, solved by SQP with qpOASES) with Kajita's dynamic filter on the whole-body
-  ZMP (L1549-1567); ours is a linear LIPM MPC on ProxQP over fixed footsteps, without the dynamic
-  filter, re-planned from the estimated CoM (feedback 1) in the torque walks.
+- **Pattern generator**: the thesis's is the NMPC of Naveau et al. with Kajita's dynamic filter on the
+  whole-body ZMP (L1549-1567; in jrl-walkgen's public code: CoM jerk and two footsteps as variables,
+  SQP with qpOASES); ours is a linear LIPM MPC on ProxQP over fixed footsteps, without the dynamic
+  filter, re-planned every `period` from a blend of the estimated and the planned CoM state
+  (`feedback`, per graph below).
 - **ZMP reference**: for the torque scheme the thesis compared the estimated ZMP to the planned one,
   for the position schemes to the stabiliser's ZMP reference p* of Eq. 2.30 (L4693-4699); both are
   given above where the graph has them.
 - **Timing**: the thesis's control loop is C++ (the SoT and TSID); ours is Python calling Pinocchio
   and ProxQP, timed on the machine above with other processes running (see the load).
-- **Robot model**: TALOS's URDF from example-robot-data with MuJoCo's torque motors; the thesis's
-  Gazebo model had PAL's low-level PID position servos in the position schemes.
-- **Gaps the thesis leaves** (walking notes §1.4): the CoM height (ours: the standing robot's), the
-  step width 0.17 m, the swing height 0.05 m and the sole size are gap-fillers.
+- **Actuation**: the torque walks send the QP's torques to MuJoCo's motors; the position walks close
+  stiff joint PD servos in the simulated device, where the thesis's Gazebo model had the PID gains
+  of a low-level position control (high on the ankles, L4712-4714).
+- **Gaps the thesis leaves** (walking notes §1.4): the CoM height (ours: the standing robot's, or the
+  graph's `pattern.com_height`), the step width 0.17 m, the swing height 0.05 m and the sole size are
+  gap-fillers.
 """
 
 
@@ -645,8 +648,17 @@ def document(command: str, walks: list[Walk], results: dict[str, dict], comparis
         peer_text(comparisons, before),
         "\n## What differs from the thesis\n",
         DIFFERENCES,
+        pattern_settings(walks),
     ]
     return "\n".join(parts)
+
+
+def pattern_settings(walks: list[Walk]) -> str:
+    """The pattern generator's settings each walk graph gives (the rest are its defaults)."""
+    rows = [[walk.name, ", ".join(f"`{name}` {value}" for name, value in walk.pattern_params.items()) or "defaults"]
+            for walk in walks if walk.problem is None]
+    return "Pattern generator settings per graph (`pattern.*`; the others are ZmpPatternGenerator's defaults):\n\n" \
+        + table(["graph", "settings"], rows)
 
 
 def peer_text(comparisons: list[dict[str, object]], cal: dict[str, object]) -> str:
