@@ -20,9 +20,9 @@ parameter that does not set its own; ``robot: arm.urdf``, a path, is taken from 
 folder, as every path a file gives (``path``, ``name_or_path`` and ``path_list`` parameters:
 ``mjcf``, a ``model`` that is a URDF path, ``package_dirs``).
 
-A file can build on another: ``extends`` (a path relative to the file; chains of at most
-``MAX_EXTENDS`` files, no cycles) applies the file, in this order, to the graph the base
-describes::
+A file can build on another: ``extends`` (a path relative to the file, or a list of them, each
+one's chain applied in order and every file once, at its first place; at most ``MAX_EXTENDS``
+distinct files, no cycles) applies the file, in this order, to the graph the bases describe::
 
     extends: base/talos.yaml
     name: talos_sway           # name, dt, duration, robot: the nearest file's
