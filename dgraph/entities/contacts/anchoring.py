@@ -25,6 +25,7 @@ class AnchoredContact(Activatable):
     has_state = True
 
     anchor = dg.State(dtype="object", doc="anchored placement or point; None while inactive")
+    _scaled_bounds: tuple[float, np.ndarray, np.ndarray] | None = None  # (scale, lower, upper), the last made
     normal_force_scale = dg.Input(shape=(), default=1.0, minimum=0.0,
                                   doc="multiplies max_normal_force (a contact being removed ramps it to 0)")
     force_weight_scale = dg.Input(shape=(), default=1.0, minimum=0.0,
@@ -36,7 +37,6 @@ class AnchoredContact(Activatable):
         ``ParamError`` when crossed)."""
         if self.max_normal_force < self.min_normal_force:
             raise dg.ParamError(f"{self.name}: max_normal_force < min_normal_force", entity=self.name)
-        self._scaled_bounds: tuple[float, np.ndarray, np.ndarray] | None = None  # (scale, lower, upper), last made
         return (np.concatenate([np.full(n_faces, -np.inf), [self.min_normal_force]]),
                 np.concatenate([np.zeros(n_faces), [self.max_normal_force]]))
 
