@@ -65,9 +65,9 @@ import dgraph as dg  # noqa: E402
 from dgraph.entities.recording import Recorder  # noqa: E402
 from dgraph.entities.robot import load_model  # noqa: E402
 from dgraph.entities.stabilizers import divergent_component, natural_frequency  # noqa: E402
+from dgraph.entities.stabilizers.lipm import GRAVITY  # noqa: E402
 from dgraph.entities.walking import FootstepPlan, ZmpPatternGenerator  # noqa: E402
 from dgraph.entities.walking.footsteps import SIDES, convex_hull  # noqa: E402
-from dgraph.entities.walking.lipm_mpc import GRAVITY  # noqa: E402
 from dgraph.entities.walking.pattern_generator import SupportPolygons  # noqa: E402
 from dgraph.evaluation import (  # noqa: E402
     before_fall,
@@ -81,7 +81,7 @@ from dgraph.evaluation import (  # noqa: E402
     tick_statistics,
     tracking_error,
 )
-from dgraph_sim.truth import true_com_and_frames  # noqa: E402
+from dgraph_sim.truth import robot_mass, true_com_and_frames  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 WALKS = {  # graph -> (the thesis's scheme, walk)
@@ -206,11 +206,6 @@ def ankle_columns(model: object, side: str) -> list[int]:
     return [model.joints[model.getJointId(f"leg_{side}_{k}_joint")].idx_v - 6 for k in (5, 6)]
 
 
-def robot_mass() -> float:
-    """TALOS's mass in its model (kg)."""
-    return sum(inertia.mass for inertia in load_model("talos").inertias)
-
-
 def evaluate(walk: Walk) -> dict[str, object]:
     """Every metric of one walk, on the ticks before a fall."""
     data = walk.data
@@ -226,8 +221,7 @@ def evaluate(walk: Walk) -> dict[str, object]:
 def measured_dcm(walk: Walk, com: np.ndarray) -> np.ndarray:
     """The true DCM ``c + c_dot / omega`` (Eq. 2.27), ``c_dot`` by central differences of the true
     CoM, ``omega`` from the planned CoM height above the ground."""
-    ground = 0.5 * (walk.plan.initial_left[2, 3] + walk.plan.initial_right[2, 3])
-    omega = natural_frequency(walk.data["pattern.com_position"][:, 2] - ground)
+    omega = natural_frequency(walk.data["pattern.com_position"][:, 2] - walk.plan.ground_height())
     return divergent_component(com, np.gradient(com, walk.dt, axis=0), omega)
 
 

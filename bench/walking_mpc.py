@@ -37,8 +37,8 @@ from calibration import BusyMeter, calibrate, calibration_line, in_loops  # noqa
 import dgraph as dg  # noqa: E402
 from dgraph.entities.estimators.leg_odometry import standing_configuration  # noqa: E402
 from dgraph.entities.robot.loading import load_model  # noqa: E402
+from dgraph.entities.stabilizers.lipm import GRAVITY  # noqa: E402
 from dgraph.entities.walking import FootstepPlanner, ZmpPatternGenerator  # noqa: E402
-from dgraph.entities.walking.lipm_mpc import GRAVITY  # noqa: E402
 
 DT = 0.001
 REFERENCES = ("com_position", "com_velocity", "com_acceleration", "zmp", "zmp_velocity", "dcm", "dcm_velocity")

@@ -12,12 +12,20 @@ import pinocchio as pin
 from dgraph.entities.robot import load_model
 
 
+def robot_mass(model: str | Any = "talos") -> float:
+    """The robot's mass in its model (kg)."""
+    return float(sum(inertia.mass for inertia in load_model(model).inertias))
+
+
 def true_com_and_frames(q: np.ndarray, frames: Sequence[str],
                         model: str | Any = "talos") -> tuple[np.ndarray, np.ndarray]:
     """The CoM (ticks x 3) and the positions of ``frames`` (ticks x len(frames) x 3), world, of
     each configuration of ``q`` (ticks x nq, Pinocchio convention: ``device.q`` recorded)."""
     robot = load_model(model)
     data = robot.createData()
+    missing = [name for name in frames if not robot.existFrame(name)]
+    if missing:
+        raise ValueError(f"no frame {', '.join(map(repr, missing))} in the model {robot.name!r}")
     ids = [robot.getFrameId(name) for name in frames]
     com, positions = [], []
     for qi in q:

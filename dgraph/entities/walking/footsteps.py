@@ -327,6 +327,10 @@ class FootstepPlan:
         """Plan time (s, what the phases count in) at graph time ``seconds`` (``t dt``): ``seconds - start``."""
         return seconds - self.start
 
+    def ground_height(self) -> float:
+        """The mean height of the two initial soles: the ground the CoM height is counted from."""
+        return 0.5 * float(self.initial_left[2, 3] + self.initial_right[2, 3])
+
     def final_midpoint(self) -> np.ndarray:
         """(3,) the midpoint of the two final sole centres (where the robot ends)."""
         feet = self._feet[-1]

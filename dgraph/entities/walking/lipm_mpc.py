@@ -30,15 +30,18 @@ generator, thesis §4.5.3.b L5137-5177). Default weights and horizon are jrl-wal
 The cost's Hessian, the condensed matrices and the ProxQP problem are built once (a new CoM
 height means a new :class:`LipmMpc`); each solve writes the gradient, the constraint rows and
 their bounds into the same problem and warm-starts from the previous solution (shifted by the
-whole samples elapsed). Every polygon is padded to ``max_edges`` rows (a zero row with an
-infinite bound is inactive), so the problem's size never changes. A failed solve raises
+whole samples elapsed since it was made: none when it re-plans every 5 ms, some after failed
+re-plans). Every polygon is padded to ``max_edges`` rows (a zero row with an
+infinite bound is inactive), so the problem's size never changes. The ZMP is constrained at the
+samples only: between two of them it follows the cubic CoM and may leave a polygon whose phase
+is shorter than ``T`` (a 0.115 s double support moving the ZMP 0.6 m does, by up to 62 mm on the
+60 cm walk's plan, docs/walking.md; the 20 cm walk's stays 2 cm inside its soles). A failed solve raises
 nothing: its :class:`MpcResult` has the status and no trajectory, and the caller keeps the
 previous one.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -47,9 +50,8 @@ import numpy as np
 
 from dgraph.control.proxqp import INFINITY, WarmStartedQP
 from dgraph.control.status import NOT_FINITE, SOLVED, Status
+from dgraph.entities.stabilizers.lipm import GRAVITY, natural_frequency
 
-GRAVITY = 9.81
-"""m/s^2, the gravity of the LIPM (as ``stabilizers/lipm.py``)."""
 MAX_EDGES = 8
 """Rows per polygon: the convex hull of two rectangular soles has at most 8 edges."""
 EPS_ABS = 1e-6
@@ -156,7 +158,7 @@ class CondensedLipm:
 
     def __init__(self, sampling: float, horizon: int, com_height: float, gravity: float = GRAVITY):
         transition, jerk_input = lipm_transition(sampling)
-        self.omega = math.sqrt(gravity / com_height)
+        self.omega = float(natural_frequency(com_height, gravity))
         self.state_maps = np.empty((horizon + 1, 3, 3))
         self.jerk_maps = np.zeros((horizon + 1, 3, horizon))
         self.state_maps[0] = np.eye(3)

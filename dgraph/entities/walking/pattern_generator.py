@@ -9,8 +9,9 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.control.status import Status
+from dgraph.entities.stabilizers.lipm import GRAVITY
 from dgraph.entities.walking.footsteps import FootstepPlan
-from dgraph.entities.walking.lipm_mpc import GRAVITY, MAX_EDGES, LipmMpc, LipmTrajectory, MpcResult, pad_polygon
+from dgraph.entities.walking.lipm_mpc import MAX_EDGES, LipmMpc, LipmTrajectory, MpcResult, pad_polygon
 from dgraph.entities.walking.swing import minimum_jerk
 from dgraph.signals.value_types import value_type
 
@@ -222,17 +223,19 @@ class ZmpPatternGenerator(dg.Entity):
             try:
                 self._polygons = SupportPolygons(plan, self.margin)
             except ValueError as exc:
-                raise dg.ParamError(f"{self.name}: parameter 'margin': {exc}", entity=self.name) from None
+                raise dg.ParamError(f"{self.name} ({self.type_name}): parameter 'margin': {exc}",
+                                    entity=self.name) from None
         return self._polygons
 
     def _solver(self, plan: FootstepPlan, measured: np.ndarray, t: int) -> LipmMpc:
         """The MPC, made at the first re-plan ``t`` (its CoM height: the parameter, else the
         estimate's height above the ground then, whose difference to it the transition removes)."""
         if self._mpc is None:
-            self._ground = 0.5 * (plan.initial_left[2, 3] + plan.initial_right[2, 3])
+            self._ground = plan.ground_height()
             height = self.com_height if self.com_height is not None else measured[0, 2] - self._ground
             if not height > 0:
-                raise dg.ParamError(f"{self.name}: the CoM height above the ground must be > 0, got {height}",
+                raise dg.ParamError(f"{self.name} ({self.type_name}): the CoM height above the ground must be > 0, "
+                                    f"got {height}",
                                     entity=self.name)
             self._mpc = LipmMpc(height, sampling=self.sampling, horizon=self.horizon, alpha=self.alpha,
                                 beta=self.beta, gamma=self.gamma, max_edges=MAX_EDGES, gravity=GRAVITY)

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from dgraph.control.status import NOT_FINITE, PRIMAL_INFEASIBLE, SOLVED
+from dgraph.entities.stabilizers.lipm import GRAVITY
 from dgraph.entities.walking.footsteps import straight_walk, turning_walk, yaw_placement
 from dgraph.entities.walking.lipm_mpc import (
-    GRAVITY,
     CondensedLipm,
     LipmMpc,
     LipmTrajectory,
