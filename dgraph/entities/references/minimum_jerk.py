@@ -11,6 +11,13 @@ from numpy.typing import ArrayLike
 import dgraph as dg
 
 
+def minimum_jerk(x: float) -> tuple[float, float, float]:
+    """The quintic ``s(x) = 10 x^3 - 15 x^4 + 6 x^5`` and its first two derivatives in ``x``:
+    ``s(0) = 0``, ``s(1) = 1``, zero first and second derivatives at both ends (every smooth
+    move and ramp of the project: this entity, Sinusoid's fade-in, swings, contact ramps)."""
+    return (x**3 * (10.0 - 15.0 * x + 6.0 * x * x), 30.0 * x * x * (1.0 - x) ** 2,
+            60.0 * x * (1.0 - x) * (1.0 - 2.0 * x))
+
 @dg.register
 class MinimumJerk(dg.Entity):
     """A minimum-jerk move from an initial value to ``target`` in ``duration`` seconds.
@@ -109,7 +116,7 @@ class MinimumJerk(dg.Entity):
             return self._out(np.array(self.current(t), dtype=float))
         s = self._s(t)
         p0 = np.asarray(self._p0(t), dtype=float)
-        return self._out(p0 + (self.target - p0) * (s**3 * (10.0 - 15.0 * s + 6.0 * s * s)))
+        return self._out(p0 + (self.target - p0) * minimum_jerk(s)[0])
 
     @dg.output(shape=lambda self: self.value_shape, depends=("t", "current", "origin"), on_demand=("current",))
     def velocity(self, t: int) -> Any:
@@ -118,7 +125,7 @@ class MinimumJerk(dg.Entity):
             return self._out(np.zeros(self.value_shape))
         s = self._s(t)
         p0 = np.asarray(self._p0(t), dtype=float)
-        return self._out((self.target - p0) / self.duration * (30.0 * s * s * (1.0 - s) ** 2))
+        return self._out((self.target - p0) / self.duration * minimum_jerk(s)[1])
 
     @dg.output(shape=lambda self: self.value_shape, depends=("t", "current", "origin"), on_demand=("current",))
     def acceleration(self, t: int) -> Any:
@@ -127,4 +134,4 @@ class MinimumJerk(dg.Entity):
             return self._out(np.zeros(self.value_shape))
         s = self._s(t)
         p0 = np.asarray(self._p0(t), dtype=float)
-        return self._out((self.target - p0) / self.duration**2 * (60.0 * s * (1.0 - s) * (1.0 - 2.0 * s)))
+        return self._out((self.target - p0) / self.duration**2 * minimum_jerk(s)[2])

@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 import dgraph as dg
+from dgraph.entities.references.minimum_jerk import minimum_jerk
 
 
 @dg.register
@@ -72,9 +73,8 @@ class Sinusoid(dg.Entity):
         ramp = self.ramp
         if ramp <= 0.0 or s >= ramp:
             return 1.0, 0.0, 0.0
-        x = max(s, 0.0) / ramp
-        return (x**3 * (10 - 15 * x + 6 * x * x), 30 * x * x * (1 - x) ** 2 / ramp,
-                60 * x * (1 - x) * (1 - 2 * x) / ramp**2)
+        e, de, dde = minimum_jerk(max(s, 0.0) / ramp)
+        return e, de / ramp, dde / ramp**2
 
     def _waves(self, t: int) -> tuple[Any, Any, Any]:
         """Position, velocity and acceleration at tick ``t``, computed together once per tick:

@@ -9,10 +9,10 @@ import numpy as np
 
 import dgraph as dg
 from dgraph.control.status import Status
+from dgraph.entities.references.minimum_jerk import minimum_jerk
 from dgraph.entities.stabilizers.lipm import GRAVITY
 from dgraph.entities.walking.footsteps import FootstepPlan
 from dgraph.entities.walking.lipm_mpc import MAX_EDGES, LipmMpc, LipmTrajectory, MpcResult, pad_polygon
-from dgraph.entities.walking.swing import minimum_jerk
 from dgraph.signals.value_types import value_type
 
 WINDOW_EPSILON = 1e-9

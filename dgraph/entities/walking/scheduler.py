@@ -7,8 +7,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import dgraph as dg
+from dgraph.entities.references.minimum_jerk import minimum_jerk
 from dgraph.entities.walking.footsteps import FootstepPlan
-from dgraph.entities.walking.swing import minimum_jerk
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 import dgraph as dg
+from dgraph.entities.references.minimum_jerk import minimum_jerk
 from dgraph.entities.robot.rotations import matrix_to_quat
 from dgraph.entities.walking.footsteps import FootstepPlan
 
@@ -18,13 +19,6 @@ _ZERO6.setflags(write=False)
 
 Sample = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 """Position (3), quaternion xyzw (4), velocity (6), acceleration (6) of a sole reference."""
-
-
-def minimum_jerk(x: float) -> tuple[float, float, float]:
-    """The quintic ``s(x) = 10 x^3 - 15 x^4 + 6 x^5`` and its first two derivatives in ``x``:
-    ``s(0) = 0``, ``s(1) = 1``, zero first and second derivatives at both ends."""
-    return (x**3 * (10.0 - 15.0 * x + 6.0 * x * x), 30.0 * x * x * (1.0 - x) ** 2,
-            60.0 * x * (1.0 - x) * (1.0 - 2.0 * x))
 
 
 def bump(x: float) -> tuple[float, float, float]:

@@ -10,8 +10,9 @@ import pinocchio as pin
 import pytest
 
 import dgraph as dg
+from dgraph.entities.references.minimum_jerk import minimum_jerk
 from dgraph.entities.walking.footsteps import straight_walk, yaw_placement
-from dgraph.entities.walking.swing import SwingPath, SwingTrajectory, bump, minimum_jerk
+from dgraph.entities.walking.swing import SwingPath, SwingTrajectory, bump
 from tests.conftest import Ticker
 
 LEFT0 = yaw_placement([0.0, 0.085, 0.0])
