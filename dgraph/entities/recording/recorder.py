@@ -19,6 +19,7 @@ from dgraph.entities.recording.layout import (
     walking_top_views,
 )
 from dgraph.entities.recording.rerun_stream import SINKS, RerunStream, default_flush_every, open_stream_for, sink_mode
+from dgraph.entities.recording.stream_view import StreamSink
 from dgraph.signals.signal import Signal
 
 
@@ -32,7 +33,7 @@ def component_names(sig: Signal, shape: tuple[int, ...]) -> list[str]:
 
 
 @dg.register
-class Recorder(dg.Entity):
+class Recorder(StreamSink, dg.Entity):
     """Records signals every tick, without changing what is computed.
 
     At each tick, after the control is computed and before the states are committed, the
@@ -235,10 +236,7 @@ class Recorder(dg.Entity):
         """Flush to Rerun, close the stream, write the .npz (idempotent)."""
         if self.closed:
             return
-        self.closed = True
-        if self._stream is not None:
-            self._send()
-            self._stream.close()
+        super().close()
         if self.npz_path:
             try:
                 Path(self.npz_path).parent.mkdir(parents=True, exist_ok=True)

@@ -1,5 +1,6 @@
-"""StreamView: what the views drawing into the graph's Rerun recording share (RobotView,
-WalkingView): their sink parameters, the check of their entity path, and how they close."""
+"""StreamSink and StreamView: what the entities sending to the graph's Rerun recording share (how
+they close: Recorder, RobotView, WalkingView), and what the views drawing into it share (their sink
+parameters, the check of their entity path: RobotView, WalkingView)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,28 @@ import dgraph as dg
 from dgraph.entities.recording.rerun_stream import SINKS, RerunStream, default_flush_every, sink_mode
 
 
-class StreamView:
+class StreamSink:
+    """Mixin for an entity that sends what it buffers to a Rerun stream (``_stream``, None until
+    opened) with ``_send``, and closes once (``closed``)."""
+
+    name: str
+    closed: bool
+    _stream: RerunStream | None
+
+    def _send(self) -> None:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Send the buffered ticks and release the shared stream (idempotent)."""
+        if self.closed:
+            return
+        self.closed = True
+        if self._stream is not None:
+            self._send()
+            self._stream.close()
+
+
+class StreamView(StreamSink):
     """Mixin for an observer that draws one tick in ``decimation`` under the entity path ``path``
     (a parameter of the class: its default differs), buffering ``flush_every`` ticks per send.
 
@@ -27,7 +49,6 @@ class StreamView:
     flush_every = dg.Param(None, kind="int", minimum=1,
                            doc="ticks buffered before a Rerun send (default: 1000 to a file, 200 to a viewer)")
 
-    name: str
     path: str
     params: dict[str, Any]
 
@@ -46,14 +67,3 @@ class StreamView:
         self._last_send: int | None = None
         self.closed = False
 
-    def _send(self) -> None:
-        raise NotImplementedError
-
-    def close(self) -> None:
-        """Send the buffered ticks and release the shared stream (idempotent)."""
-        if self.closed:
-            return
-        self.closed = True
-        if self._stream is not None:
-            self._send()
-            self._stream.close()
