@@ -14,6 +14,8 @@ from dgraph.entities.walking.pattern_generator import ComPlan, ZmpPatternGenerat
 from dgraph.entities.walking.planner import FootstepPlanner
 from dgraph.entities.walking.scheduler import ContactScheduler
 from dgraph.entities.walking.swing import SwingPath, SwingTrajectory
+from dgraph.entities.walking.terrain import TERRAINS, Surface, Terrain
 
-__all__ = ["ComPlan", "ContactScheduler", "Footstep", "FootstepPlan", "FootstepPlanner", "Phase", "SoleShape",
-           "SwingPath", "SwingTrajectory", "ZmpPatternGenerator", "lateral_walk", "straight_walk", "turning_walk"]
+__all__ = ["TERRAINS", "ComPlan", "ContactScheduler", "Footstep", "FootstepPlan", "FootstepPlanner", "Phase",
+           "SoleShape", "Surface", "SwingPath", "SwingTrajectory", "Terrain", "ZmpPatternGenerator", "lateral_walk",
+           "straight_walk", "turning_walk"]
