@@ -43,7 +43,7 @@ from dgraph_sim.camera import RobotCamera
 from dgraph_sim.disturbances import Removals
 from dgraph_sim.model import SimModel, load
 from dgraph_sim.robots import MJCF_TOLERANCE, MjcfError, RobotInfo
-from dgraph_sim.scenes import SCENES
+from dgraph_sim.scenes import SceneError
 from dgraph_sim.video import VideoError, VideoWriter, check_video, log_video
 from dgraph_sim.viewer import PassiveViewer, ViewerError, check_display
 
@@ -157,7 +157,8 @@ class MujocoDevice(dg.Device):
     actuators = dg.Param(None, kind="path", doc="actuator parameter file (YAML): its joints get the chain's armature "
                          "I_m, damping F_v, friction loss F_s, force range R K_m i_max (in a graph file, relative "
                          "to its folder)")
-    scene = dg.Param("flat", kind="str", choices=tuple(SCENES), doc="scene (dgraph_sim.scenes)")
+    scene = dg.Param("flat", kind="str", doc="scene (dgraph_sim.scenes.SCENES), or several joined by '+', "
+                     "applied in order on one floor (obstacles+push)")
     collisions = dg.Param("all", kind="str", choices=("feet", "all"),
                           doc="robot geoms touching the scene: every collision mesh (never each other), or soles only")
     control_mode = dg.Param("torque", kind="str", choices=("torque", "position"), doc="what control commands")
@@ -190,8 +191,7 @@ class MujocoDevice(dg.Device):
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
             self, name: str, *, model: str | Any = "talos", package_dirs: Sequence[str] = (), mjcf: str | None = None,
-            mjcf_tolerance: float = 0.01, actuators: str | None = None,
-            scene: Literal["flat", "block", "stairs", "slope", "push", "drill", "talos_wall"] = "flat",
+            mjcf_tolerance: float = 0.01, actuators: str | None = None, scene: str = "flat",
             collisions: Literal["feet", "all"] = "all", control_mode: Literal["torque", "position"] = "torque",
             kp: ArrayLike | None = None, kd: ArrayLike | None = None, q0: ArrayLike | None = None,
             v0: ArrayLike | None = None, dt: float | None = None, wrench_bodies: Sequence[str] = (),
@@ -230,6 +230,8 @@ class MujocoDevice(dg.Device):
                                       self.mjcf, self.mjcf_tolerance, self.actuators)
         except ChainFileError as exc:  # before ValueError, which it is
             raise dg.ParamError(f"{self.name}: parameter 'actuators': {exc}", entity=self.name) from None
+        except SceneError as exc:  # an unknown scene, two scenes adding the same name (a ValueError too)
+            raise dg.ParamError(f"{self.name}: parameter 'scene': {exc}", entity=self.name) from None
         except MjcfError as exc:  # the MJCF does not describe the robot of the Pinocchio model
             raise dg.ParamError(f"{self.name}: parameter 'mjcf': {exc}", entity=self.name) from None
         except ValueError as exc:  # a mesh not found, a joint MuJoCo cannot mirror

@@ -1,26 +1,45 @@
 """Scenes: the world around the robot, added to an ``mujoco.MjSpec``.
 
-A :class:`Scene` wraps a spec and adds a floor, blocks, stairs and tilted platforms, a light and
-a camera tracking the robot. Scene geoms collide with the robot (``contype = conaffinity = 1``;
-robot geoms have ``contype = 1, conaffinity = 0``, so they touch the scene but not each other).
-Named scenes (:data:`SCENES`) are what the ``scene`` parameter of the MuJoCo device selects::
+A :class:`Scene` wraps a spec and adds a floor, blocks, stairs and tilted platforms, the surfaces
+of a walking terrain, a light and a camera tracking the robot. Scene geoms collide with the robot
+(``contype = conaffinity = 1``; robot geoms have ``contype = 1, conaffinity = 0``, so they touch
+the scene but not each other). Named scenes (:data:`SCENES`) are what the ``scene`` parameter of
+the MuJoCo device selects, one name or several joined by ``+`` (``obstacles+push``: the boards,
+then the push scene's tool and block; :func:`add_scene`)::
 
     scene = Scene(spec)
     scene.floor(friction=1.0)
     scene.box("block", size=(0.2, 0.2, 0.2), pos=(0.6, 0.0, 0.1), free=True, mass=5.0)
     scene.stairs(steps=3, rise=0.1, run=0.3, start=(1.0, 0.0))
     scene.platform("ramp", size=(0.5, 0.5, 0.02), pos=(2.0, 0.0, 0.1), roll=0.0, pitch=0.1)
+    scene.terrain(tilted_platforms())  # a box under each surface of the planners' terrain
+
+The walking scenes ``stairs10``, ``platforms`` and ``obstacles`` are built from the terrains of
+the same names (:data:`dgraph.entities.walking.terrain.TERRAINS`), so a planner reading the
+terrain and the simulator share one geometry.
 """
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Callable, Sequence
 
 import mujoco
 import numpy as np
 
+from dgraph.entities.walking.terrain import TERRAINS, Surface, Terrain
+
 SCENE_GROUP = 0
 """Geom group of scene geoms (visible by default)."""
+SCENE_SEPARATOR = "+"
+"""Joins the names of scenes applied one after the other (``obstacles+push``)."""
+TERRAIN_RGBA = ((0.62, 0.5, 0.38, 1.0), (0.5, 0.4, 0.3, 1.0))
+"""The colours of a terrain's boxes, alternating so that neighbouring surfaces show their edges."""
+
+
+class SceneError(ValueError):
+    """A scene that cannot be built: an unknown name, two scenes adding elements of the same name,
+    two floors that differ, a robot body that a scene needs missing."""
 
 
 def _quat_from_rpy(roll: float, pitch: float, yaw: float = 0.0) -> list[float]:
@@ -36,6 +55,7 @@ class Scene:
     def __init__(self, spec: mujoco.MjSpec):
         self.spec = spec
         self._material_added = False
+        self._floor: tuple[mujoco.MjsGeom, float, float] | None = None
 
     def _grid_material(self) -> str:
         if not self._material_added:
@@ -48,11 +68,21 @@ class Scene:
         return "grid"
 
     def floor(self, friction: float = 1.0, height: float = 0.0) -> mujoco.MjsGeom:
-        """An infinite plane at ``z = height`` with sliding friction ``friction``."""
-        return self.spec.worldbody.add_geom(
+        """An infinite plane at ``z = height`` with sliding friction ``friction``, added once: a
+        second call (a scene composed of several) returns the first floor, or raises
+        :class:`SceneError` if it asks for another friction or height."""
+        if self._floor is not None:
+            geom, first_friction, first_height = self._floor
+            if (friction, height) != (first_friction, first_height):
+                raise SceneError(f"two floors differ: friction {first_friction}, height {first_height} m, then "
+                                 f"friction {friction}, height {height} m")
+            return geom
+        geom = self.spec.worldbody.add_geom(
             name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0.0, 0.0, 0.05], pos=[0.0, 0.0, height],
             friction=[friction, 0.005, 0.0001], material=self._grid_material(), contype=1, conaffinity=1,
             group=SCENE_GROUP)
+        self._floor = (geom, friction, height)
+        return geom
 
     def box(self, name: str, size: Sequence[float], pos: Sequence[float], *, free: bool = False,
             mocap: bool = False, mass: float = 1.0, friction: float = 1.0, roll: float = 0.0, pitch: float = 0.0,
@@ -93,6 +123,37 @@ class Scene:
         """A static tilted box (full ``size``) centred at ``pos``, rotated by ``roll`` then ``pitch`` (rad)."""
         return self.box(name, size, pos, roll=roll, pitch=pitch)
 
+    def surface(self, surface: Surface, friction: float = 1.0,
+                rgba: Sequence[float] = TERRAIN_RGBA[0]) -> mujoco.MjsGeom:
+        """A static box named as ``surface`` whose top face is the surface's rectangle and which
+        reaches the floor (z = 0) under all of it: the box has the surface's rotation ``R`` and
+        half extents ``(a, b)``, a depth ``d = max_k z_k / n_z`` (``z_k`` the corners' heights,
+        ``n`` the normal: the bottom face's highest corner is at z = 0) and its centre at
+        ``c - (d / 2) n``. A tilted box's sides lean with it: beyond the surface's high edge its
+        side comes down to the floor ``d sin(tilt)`` away (4.9 cm for the platforms' 0.181 m
+        edges), below the edge's height; a terrain puts the floor there. SceneError for an
+        unbounded surface or one not above the floor."""
+        if not surface.bounded:
+            raise SceneError(f"surface {surface.name!r} is unbounded: no box has it as a face")
+        highest = float(surface.corners()[:, 2].max())
+        if highest <= 0.0:
+            raise SceneError(f"surface {surface.name!r} is not above the floor (its highest corner at {highest} m)")
+        depth = highest / surface.normal[2]
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(surface.placement[:3, :3]).reshape(-1))
+        return self.spec.worldbody.add_geom(
+            name=surface.name, type=mujoco.mjtGeom.mjGEOM_BOX, size=[*surface.half_extents, depth / 2.0],
+            pos=(surface.center - 0.5 * depth * surface.normal).tolist(), quat=quat.tolist(),
+            friction=[friction, 0.005, 0.0001], rgba=list(rgba), contype=1, conaffinity=1, group=SCENE_GROUP)
+
+    def terrain(self, terrain: Terrain, friction: float = 1.0) -> list[mujoco.MjsGeom]:
+        """The floor if ``terrain`` has one (:meth:`floor`), then a box under each of its
+        surfaces (:meth:`surface`), in colours alternating along them; returns the boxes."""
+        if terrain.floor:
+            self.floor(friction=friction)
+        return [self.surface(surface, friction, TERRAIN_RGBA[index % 2])
+                for index, surface in enumerate(terrain.surfaces)]
+
     def tool(self, body: str, start: Sequence[float], end: Sequence[float], radius: float,
              name: str = "tool") -> mujoco.MjsGeom:
         """A massless cylinder held by a robot ``body`` from ``start`` to ``end`` (body frame), touching
@@ -100,7 +161,7 @@ class Scene:
         Pinocchio model stays exact."""
         robot_body = self.spec.body(body)
         if robot_body is None:
-            raise ValueError(f"the tool {name!r} needs the robot body {body!r}, which the model does not have")
+            raise SceneError(f"the tool {name!r} needs the robot body {body!r}, which the model does not have")
         robot_body.add_site(name=f"{name}_tip", pos=list(end), size=[0.005, 0.005, 0.005], group=4)
         return robot_body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER, fromto=[*start, *end],
                                    size=[radius, 0.0, 0.0], mass=0.0, density=0.0, rgba=[0.2, 0.2, 0.25, 1.0],
@@ -177,10 +238,26 @@ def block(scene: Scene) -> None:
     scene.box("block", size=(0.3, 0.4, 0.5), pos=(0.6, 0.0, 0.25), free=True, mass=10.0)
 
 
-def stairs(scene: Scene) -> None:
-    """Flat floor and three 10 cm steps of 30 cm starting 0.5 m in front of the robot."""
-    scene.floor(friction=1.0)
-    scene.stairs(steps=3, rise=0.1, run=0.3, start=(0.5, 0.0))
+def stairs10(scene: Scene) -> None:
+    """The terrain ``stairs10`` (:func:`dgraph.entities.walking.terrain.stairs`): six 10 cm rises
+    over 0.30 m treads, 1.0 m wide, the first riser 0.15 m ahead of the robot, the 1.0 x 2.0 m
+    landing at 0.60 m (thesis L4839, the walking notes §1.5)."""
+    scene.terrain(TERRAINS["stairs10"]())
+
+
+def platforms(scene: Scene) -> None:
+    """The terrain ``platforms`` (:func:`dgraph.entities.walking.terrain.tilted_platforms`): the
+    two flat pads at 0.16 m and the four pads tilted by 15 degrees of mlp's tilted platforms, the
+    first pad's edge 0.15 m ahead of the robot (the walking notes §1.5). The mesh's pads are 3 cm
+    slabs in the air; here each is a solid box down to the floor."""
+    scene.terrain(TERRAINS["platforms"]())
+
+
+def obstacles(scene: Scene) -> None:
+    """The terrain ``obstacles`` (:func:`dgraph.entities.walking.terrain.obstacles`): boards of 1
+    and 2 cm across the path, 0.30 m deep, 0.30 m apart, the first 0.15 m ahead of the robot (the
+    MPTC report's uneven terrain, obstacles up to 2 cm)."""
+    scene.terrain(TERRAINS["obstacles"]())
 
 
 def slope(scene: Scene) -> None:
@@ -249,19 +326,41 @@ def talos_wall(scene: Scene) -> None:
     scene.wall("wall", TALOS_WALL_X, center=(0.35, 1.10), size=(0.3, 0.3))
 
 
-SCENES: dict[str, Callable[[Scene], None]] = {"flat": flat, "block": block, "stairs": stairs, "slope": slope,
-                                              "push": push, "drill": drill,
-                                              "talos_wall": talos_wall}
+SCENES: dict[str, Callable[[Scene], None]] = {"flat": flat, "block": block, "stairs10": stairs10,
+                                              "platforms": platforms, "obstacles": obstacles, "slope": slope,
+                                              "push": push, "drill": drill, "talos_wall": talos_wall}
 """Scenes by name (the robot's light and tracking camera are added by :func:`add_scene`)."""
 
 
+def scene_names(name: str) -> list[str]:
+    """The scenes that ``name`` says: a name of :data:`SCENES`, or several joined by ``+``
+    (:data:`SCENE_SEPARATOR`). SceneError for an unknown name or one given twice."""
+    names = name.split(SCENE_SEPARATOR)
+    for part in names:
+        if part not in SCENES:
+            raise SceneError(f"unknown scene {part!r}" + (f" in {name!r}" if len(names) > 1 else "")
+                             + f"; known: {', '.join(SCENES)}")
+    repeated = next((part for part, count in Counter(names).items() if count > 1), None)
+    if repeated is not None:
+        raise SceneError(f"{name!r} gives the scene {repeated!r} twice")
+    return names
+
+
 def add_scene(spec: mujoco.MjSpec, name: str, tracked_body: str | None = None) -> Scene:
-    """Add the scene ``name`` to ``spec``, plus a light, a ``front`` camera fixed in the world and
-    (if given) a ``track`` camera following ``tracked_body`` from the side."""
-    if name not in SCENES:
-        raise ValueError(f"unknown scene {name!r}; known: {', '.join(SCENES)}")
+    """Add the scene ``name`` to ``spec`` (several joined by ``+``: each in order, one floor;
+    :func:`scene_names`), plus a light, a ``front`` camera fixed in the world and (if given) a
+    ``track`` camera following ``tracked_body`` from the side. SceneError for a scene that cannot
+    be built (:class:`SceneError`)."""
+    names = scene_names(name)
     scene = Scene(spec)
-    SCENES[name](scene)
+    for index, part in enumerate(names):
+        try:
+            SCENES[part](scene)
+        except SceneError:
+            raise
+        except ValueError as exc:  # MuJoCo refuses a name that the model or an earlier scene has
+            after = f" after {', '.join(map(repr, names[:index]))}" if index else ""
+            raise SceneError(f"scene {part!r} cannot be added{after}: {exc}") from None
     scene.light()
     scene.sky()
     scene.front_camera()
