@@ -65,7 +65,7 @@ def rigid_transform_problem(placement: Any) -> str | None:
     return None
 
 
-def _frozen(array: Any) -> np.ndarray:
+def frozen_array(array: Any) -> np.ndarray:
     """A read-only float copy of ``array``."""
     copy = np.array(array, dtype=float)
     copy.setflags(write=False)
@@ -106,7 +106,7 @@ class Footstep:
     double_support: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "placement", _frozen(self.placement))
+        object.__setattr__(self, "placement", frozen_array(self.placement))
         object.__setattr__(self, "single_support", float(self.single_support))
         object.__setattr__(self, "double_support", float(self.double_support))
 
@@ -184,8 +184,8 @@ class FootstepPlan:
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__
-        set_field(self, "initial_left", _frozen(self.initial_left))
-        set_field(self, "initial_right", _frozen(self.initial_right))
+        set_field(self, "initial_left", frozen_array(self.initial_left))
+        set_field(self, "initial_right", frozen_array(self.initial_right))
         set_field(self, "steps", tuple(self.steps))
         set_field(self, "initial_double_support", float(self.initial_double_support))
         set_field(self, "final_double_support", float(self.final_double_support))
@@ -358,22 +358,22 @@ class FootstepPlan:
         (naming the step) on anything else."""
         known = {"initial_left", "initial_right", "steps", "initial_double_support", "final_double_support", "sole",
                  "start"}
-        mapping = _mapping(value, "a footstep plan", known)
+        mapping = plain_mapping(value, "a footstep plan", known)
         missing = sorted(known - {"sole", "start"} - set(mapping))
         if missing:
             raise ValueError(f"a footstep plan needs {', '.join(missing)}")
-        final = _number(mapping["final_double_support"], "final_double_support")
+        final = plain_number(mapping["final_double_support"], "final_double_support")
         plain_steps = mapping["steps"]
         if isinstance(plain_steps, (str, Mapping)) or not isinstance(plain_steps, Sequence):
             raise TypeError("steps must be a list of footsteps")
         steps = [footstep_from_plain(step, index, double_support=final if index == len(plain_steps) - 1 else None)
                  for index, step in enumerate(plain_steps)]
-        sole = SoleShape(**{key: _number(number, f"sole.{key}") for key, number in
-                            _mapping(mapping.get("sole", {}), "sole", {"front", "back", "half_width"}).items()})
+        sole = SoleShape(**{key: plain_number(number, f"sole.{key}") for key, number in
+                            plain_mapping(mapping.get("sole", {}), "sole", {"front", "back", "half_width"}).items()})
         return cls(placement_from_plain(mapping["initial_left"], "initial_left"),
                    placement_from_plain(mapping["initial_right"], "initial_right"), tuple(steps),
-                   _number(mapping["initial_double_support"], "initial_double_support"), final, sole,
-                   _number(mapping.get("start", 0.0), "start"))
+                   plain_number(mapping["initial_double_support"], "initial_double_support"), final, sole,
+                   plain_number(mapping.get("start", 0.0), "start"))
 
 
 def footstep_from_plain(value: Any, index: int, single_support: float | None = None,
@@ -382,11 +382,11 @@ def footstep_from_plain(value: Any, index: int, single_support: float | None = N
     and ``yaw`` (rad, default 0); ``single_support`` and ``double_support`` (s; the arguments
     are the defaults when the mapping has none). ValueError or TypeError naming the step."""
     where = f"step {index}"
-    mapping = _mapping(value, where, {"side", "placement", "position", "yaw", "single_support", "double_support"})
+    mapping = plain_mapping(value, where, {"side", "placement", "position", "yaw", "single_support", "double_support"})
     durations = {"single_support": single_support, "double_support": double_support}
     for key in durations:
         if key in mapping:
-            durations[key] = _number(mapping[key], f"{where}: {key}")
+            durations[key] = plain_number(mapping[key], f"{where}: {key}")
         elif durations[key] is None:
             raise ValueError(f"{where}: {key} is missing")
     if "side" not in mapping:
@@ -413,7 +413,7 @@ def placement_from_plain(value: Any, where: str) -> np.ndarray:
         position = np.asarray(value["position"], dtype=float)
         if position.shape != (3,):
             raise ValueError(f"{where}: position must be [x, y, z], got {value['position']!r}")
-        return yaw_placement(position, _number(value.get("yaw", 0.0), f"{where}: yaw"))
+        return yaw_placement(position, plain_number(value.get("yaw", 0.0), f"{where}: yaw"))
     placement = np.asarray(value, dtype=float)
     problem = rigid_transform_problem(placement)
     if problem:
@@ -421,7 +421,7 @@ def placement_from_plain(value: Any, where: str) -> np.ndarray:
     return placement
 
 
-def _mapping(value: Any, where: str, known: set[str]) -> Mapping[str, Any]:
+def plain_mapping(value: Any, where: str, known: set[str]) -> Mapping[str, Any]:
     """``value`` if it is a mapping with only ``known`` keys (TypeError, ValueError otherwise)."""
     if not isinstance(value, Mapping):
         raise TypeError(f"{where} must be a mapping, got {type(value).__name__}")
@@ -431,7 +431,7 @@ def _mapping(value: Any, where: str, known: set[str]) -> Mapping[str, Any]:
     return value
 
 
-def _number(value: Any, where: str) -> float:
+def plain_number(value: Any, where: str) -> float:
     """``value`` as a finite float (TypeError for a non-number, ValueError for a non-finite one)."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{where} must be a number, got {value!r}")

@@ -31,10 +31,10 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from dgraph.entities.walking.footsteps import (
-    _frozen,
-    _mapping,
-    _number,
+    frozen_array,
     placement_from_plain,
+    plain_mapping,
+    plain_number,
     rigid_transform_problem,
 )
 from dgraph.signals.value_types import value_type
@@ -82,7 +82,7 @@ class Surface:
         problem = rigid_transform_problem(self.placement)
         if problem:
             raise ValueError(f"surface {self.name!r}: {problem}")
-        object.__setattr__(self, "placement", _frozen(self.placement))
+        object.__setattr__(self, "placement", frozen_array(self.placement))
         extents = tuple(self.half_extents) if isinstance(self.half_extents, (Sequence, np.ndarray)) else ()
         if len(extents) != 2 or not all(_is_number(e) and e > 0.0 for e in extents):
             raise ValueError(f"surface {self.name!r}: half_extents must be two numbers > 0, got {self.half_extents!r}")
@@ -138,7 +138,7 @@ class Surface:
         """A surface from a mapping: ``name``, ``half_extents`` ``[a, b]`` (m) and ``placement``
         (4x4) or ``position`` ``[x, y, z]`` with an optional ``yaw`` (rad; a horizontal surface).
         TypeError or ValueError, naming ``where``, on anything else."""
-        mapping = _mapping(value, where, {"name", "placement", "position", "yaw", "half_extents"})
+        mapping = plain_mapping(value, where, {"name", "placement", "position", "yaw", "half_extents"})
         for key in ("name", "half_extents"):
             if key not in mapping:
                 raise ValueError(f"{where}: {key} is missing")
@@ -148,7 +148,7 @@ class Surface:
         placement = placement_from_plain({k: mapping[k] for k in ("placement", "position", "yaw") if k in mapping},
                                          where)
         try:
-            return cls(mapping["name"], placement, tuple(_number(e, f"{where}: half_extents") for e in extents))
+            return cls(mapping["name"], placement, tuple(plain_number(e, f"{where}: half_extents") for e in extents))
         except ValueError as exc:
             raise ValueError(f"{where}: {exc}") from None
 
@@ -237,7 +237,7 @@ class Terrain:
             if value not in TERRAINS:
                 raise ValueError(f"unknown terrain {value!r}; known: {', '.join(TERRAINS)}")
             return TERRAINS[value]()
-        mapping = _mapping(value, "a terrain", {"floor", "surfaces"})
+        mapping = plain_mapping(value, "a terrain", {"floor", "surfaces"})
         if "surfaces" not in mapping:
             raise ValueError("a terrain needs surfaces (a list, empty for the floor alone)")
         plain = mapping["surfaces"]
@@ -302,7 +302,7 @@ def stairs(steps: int = 6, rise: float = 0.10, tread: float = 0.30, width: float
     if isinstance(landing, (str, Mapping)) or not isinstance(landing, Sequence) or len(landing) != 2:
         raise ValueError(f"landing must be (depth, width), got {landing!r}")
     depth, landing_width = _positive(landing[0], "landing depth"), _positive(landing[1], "landing width")
-    start = _number(start, "start")
+    start = plain_number(start, "start")
     treads = [_box_top(f"step_{k}", (start + (k - 1) * tread, start + k * tread), (-width / 2, width / 2), k * rise)
               for k in range(1, steps)]
     top = start + (steps - 1) * tread
@@ -351,7 +351,7 @@ def tilted_platforms(start: float = FIRST_EDGE, height: float = _PADS_FLAT_HEIGH
     (y > 0), ``tilted_2`` and ``tilted_4`` with its right foot, and ends on ``flat_2``.
 
     ValueError if ``height`` puts a pad's lowest edge at or under the floor (below 0.0619 m)."""
-    start, height = _number(start, "start"), _number(height, "height")
+    start, height = plain_number(start, "start"), plain_number(height, "height")
     shift = np.array([start, -_PADS_CENTRE_LINE, height - _PADS_FLAT_HEIGHT])
     surfaces = tuple(Surface(pad.name, _placement(np.add(pad.center, shift), math.radians(pad.roll),
                                                   math.radians(pad.pitch)), pad.half_extents)
@@ -380,8 +380,8 @@ def obstacles(heights: Sequence[float] = OBSTACLE_HEIGHTS, start: float = FIRST_
     if isinstance(heights, (str, Mapping)) or not isinstance(heights, Sequence) or not heights:
         raise ValueError(f"heights must be a non-empty list of heights, got {heights!r}")
     heights = [_positive(h, f"obstacle {k} height") for k, h in enumerate(heights, start=1)]
-    start, depth, width = _number(start, "start"), _positive(depth, "depth"), _positive(width, "width")
-    gap = _number(gap, "gap")
+    start, depth, width = plain_number(start, "start"), _positive(depth, "depth"), _positive(width, "width")
+    gap = plain_number(gap, "gap")
     if gap < 0.0:
         raise ValueError(f"gap must be >= 0, got {gap}")
     boards = []
