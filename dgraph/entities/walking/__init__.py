@@ -8,6 +8,7 @@ from dgraph.entities.walking.footsteps import (
     SoleShape,
     lateral_walk,
     straight_walk,
+    terrain_walk,
     turning_walk,
 )
 from dgraph.entities.walking.pattern_generator import ComPlan, ZmpPatternGenerator
@@ -18,4 +19,4 @@ from dgraph.entities.walking.terrain import TERRAINS, Surface, Terrain
 
 __all__ = ["TERRAINS", "ComPlan", "ContactScheduler", "Footstep", "FootstepPlan", "FootstepPlanner", "Phase",
            "SoleShape", "Surface", "SwingPath", "SwingTrajectory", "Terrain", "ZmpPatternGenerator", "lateral_walk",
-           "straight_walk", "turning_walk"]
+           "straight_walk", "terrain_walk", "turning_walk"]

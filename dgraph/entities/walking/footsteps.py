@@ -1,6 +1,7 @@
 """Footstep plans: the :class:`FootstepPlan` value type (the footsteps, their timing, the phases,
 the ZMP reference and the support polygons derived from them) and its builders
-(:func:`straight_walk`, :func:`lateral_walk`, :func:`turning_walk`).
+(:func:`straight_walk`, :func:`lateral_walk`, :func:`turning_walk`; :func:`terrain_walk`, a straight
+walk put on a terrain).
 
 Conventions: placements are 4x4 homogeneous transforms of a sole frame in the world (z up; the
 frame's origin on the sole, its z axis the sole's normal; TALOS's ``left_sole_link`` and
@@ -22,11 +23,14 @@ import bisect
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from dgraph.signals.value_types import value_type
+
+if TYPE_CHECKING:  # terrain imports this module
+    from dgraph.entities.walking.terrain import Terrain
 
 SIDES = ("left", "right")
 """The two feet, in the order of every per-foot pair."""
@@ -562,6 +566,15 @@ def straight_walk(initial_left: np.ndarray, initial_right: np.ndarray, *, steps:
     midpoint. Timing: every step ``single_support`` then ``double_support`` (s), the last followed
     by ``final_double_support``; ``initial_double_support`` before the first lift-off.
     """
+    targets = _straight_targets(initial_left, initial_right, steps, length, width, first_side, half_first, half_last)
+    return _plan(initial_left, initial_right, targets, single_support, double_support, initial_double_support,
+                 final_double_support, sole)
+
+
+def _straight_targets(initial_left: np.ndarray, initial_right: np.ndarray, steps: int, length: float,
+                      width: float | None, first_side: str, half_first: bool,
+                      half_last: bool) -> list[tuple[str, np.ndarray]]:
+    """The footsteps (side, flat placement) of :func:`straight_walk`, in order."""
     _check_count(steps)
     _check_side(first_side)
     frame = _WalkFrame.of(initial_left, initial_right, width)
@@ -574,8 +587,63 @@ def straight_walk(initial_left: np.ndarray, initial_right: np.ndarray, *, steps:
         side = other_side(side)
     along[side] = along[other_side(side)] + (0.0 if half_last else length)
     targets.append((side, frame.sole(side, along[side])))
-    return _plan(initial_left, initial_right, targets, single_support, double_support, initial_double_support,
+    return targets
+
+
+def terrain_walk(terrain: Terrain, initial_left: np.ndarray, initial_right: np.ndarray, *, steps: int,
+                 length: float, width: float | None = None, first_side: str = "left", half_first: bool = True,
+                 half_last: bool = True, single_support: float = 0.9, double_support: float = 0.115,
+                 initial_double_support: float = 1.0, final_double_support: float = 1.0,
+                 sole: SoleShape = SoleShape(), margin: float = 0.0) -> FootstepPlan:
+    """:func:`straight_walk` on a terrain: the same footsteps in the horizontal plane and the same
+    timing (every argument but ``terrain`` and ``margin`` as there), each footstep put on the
+    surface under its sole centre (:meth:`Terrain.surface_under`).
+
+    A flat footstep of heading ``h`` (its x axis) and sole centre ``(c_x, c_y)``
+    (:meth:`SoleShape.center`) on the surface of normal ``n`` becomes the sole frame ``R = [x, y, n]``
+    with ``x = (h - (h . n) n) / |h - (h . n) n|`` (the heading projected onto the surface's
+    plane), ``y = n x x``, its centre ``c = (c_x, c_y, z(c_x, c_y))`` on the plane (the height of
+    :meth:`Surface.height_at`) and its origin ``c - x (front - back) / 2``. On a floor at the
+    initial feet's height the plan is :func:`straight_walk`'s.
+
+    ValueError naming the step index and the surface if the four sole corners of a footstep are
+    not all on that surface, at least ``margin`` (m) inside its edges (:meth:`Surface.contains`)
+    with no higher surface over any of them (the foot straddles an edge, e.g. a stair's: change
+    ``length`` or the terrain's ``start``), or if there is no surface under a sole centre.
+
+    Not handled yet: the ZMP and CoM over changing heights. The plan's ZMP reference is horizontal
+    and the pattern generator still plans the CoM at one height, so a walk up stairs or onto
+    platforms has its footsteps on the terrain but not a CoM that climbs with them.
+    """
+    targets = _straight_targets(initial_left, initial_right, steps, length, width, first_side, half_first, half_last)
+    on_terrain = [(side, _on_surface(terrain, placement, sole, margin, index))
+                  for index, (side, placement) in enumerate(targets)]
+    return _plan(initial_left, initial_right, on_terrain, single_support, double_support, initial_double_support,
                  final_double_support, sole)
+
+
+def _on_surface(terrain: Terrain, placement: np.ndarray, sole: SoleShape, margin: float, index: int) -> np.ndarray:
+    """The flat ``placement`` of footstep ``index`` put on the surface under its sole centre (see
+    :func:`terrain_walk`); ValueError naming the step and the surface if the sole is not wholly on it."""
+    centre = sole.center(placement)
+    surface = terrain.surface_under(centre[0], centre[1])
+    if surface is None:
+        raise ValueError(f"step {index}: no surface under the sole centre ({centre[0]:.4f}, {centre[1]:.4f})")
+    normal = surface.normal
+    heading = placement[:3, 0] - (placement[:3, 0] @ normal) * normal
+    heading /= np.linalg.norm(heading)
+    on_surface = np.eye(4)
+    on_surface[:3, :3] = np.column_stack([heading, np.cross(normal, heading), normal])
+    on_surface[:3, 3] = [centre[0], centre[1], surface.height_at(centre[0], centre[1])]
+    on_surface[:3, 3] -= heading * (0.5 * (sole.front - sole.back))
+    for corner in sole.corners(on_surface):
+        under = terrain.surface_under(corner[0], corner[1])
+        if not surface.contains(corner[0], corner[1], margin) or under is None or under.name != surface.name:
+            where = ("off every surface" if under is None else f"over {under.name!r}" if under.name != surface.name
+                     else f"within {margin} m of its edge")
+            raise ValueError(f"step {index}: the sole is not wholly on surface {surface.name!r} (margin {margin} m): "
+                             f"its corner ({corner[0]:.4f}, {corner[1]:.4f}) is {where}")
+    return on_surface
 
 
 def lateral_walk(initial_left: np.ndarray, initial_right: np.ndarray, *, steps: int, length: float,
