@@ -184,6 +184,7 @@ class FootstepPlan:
     duration: float = field(init=False)
     _feet: tuple[dict[str, np.ndarray], ...] = field(init=False, repr=False)
     _starts: list[float] = field(init=False, repr=False)
+    _zmp_table: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = field(init=False, repr=False)
     _polygons: dict[int, tuple[np.ndarray, np.ndarray, float]] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -200,6 +201,9 @@ class FootstepPlan:
         set_field(self, "_feet", feet)
         set_field(self, "duration", phases[-1].end)
         set_field(self, "_starts", [phase.start for phase in phases])
+        set_field(self, "_zmp_table", (np.array(self._starts), np.array([phase.end for phase in phases]),
+                                       np.array([phase.zmp_from for phase in phases]),
+                                       np.array([phase.zmp_to for phase in phases])))
         set_field(self, "_polygons", {})
 
     def _validate(self) -> None:
@@ -289,14 +293,11 @@ class FootstepPlan:
         """(n, 2) the ZMP reference at ``times`` (s): ``z_from + x (z_to - z_from)`` in the phase
         at each time, ``x`` its progress (see the class docstring)."""
         times = np.asarray(times, dtype=float).reshape(-1)
-        starts = np.array(self._starts)
-        ends = np.array([phase.end for phase in self.phases])
+        starts, ends, zmp_from, zmp_to = self._zmp_table
         index = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, len(starts) - 1)
         length = ends[index] - starts[index]
         reached = (times >= ends[index]).astype(float)  # the progress of a zero-length phase
         progress = np.clip(np.divide(times - starts[index], length, out=reached, where=length > 0.0), 0.0, 1.0)
-        zmp_from = np.array([phase.zmp_from for phase in self.phases])
-        zmp_to = np.array([phase.zmp_to for phase in self.phases])
         return zmp_from[index] + progress[:, None] * (zmp_to[index] - zmp_from[index])
 
     def support_polygon(self, time: float, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
