@@ -4,6 +4,7 @@ parameters, the check of their entity path: RobotView, WalkingView)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import dgraph as dg
@@ -17,9 +18,7 @@ class StreamSink:
     name: str
     closed: bool
     _stream: RerunStream | None
-
-    def _send(self) -> None:
-        raise NotImplementedError
+    _send: Callable[[], None]  # the subclass's: send what it buffered
 
     def close(self) -> None:
         """Send the buffered ticks and release the shared stream (idempotent)."""

@@ -10,8 +10,9 @@ import pytest
 
 import dgraph as dg
 from dgraph.control.status import PRIMAL_INFEASIBLE, SOLVED
+from dgraph.entities.stabilizers.lipm import GRAVITY
 from dgraph.entities.walking.footsteps import FootstepPlan, straight_walk, yaw_placement
-from dgraph.entities.walking.lipm_mpc import GRAVITY, LipmMpc
+from dgraph.entities.walking.lipm_mpc import LipmMpc
 from dgraph.entities.walking.pattern_generator import SupportPolygons, ZmpPatternGenerator
 
 DT = 0.001
