@@ -44,23 +44,35 @@ class ZmpEstimator(dg.Entity):
     ankle sensors, ``MujocoDevice.ft_*_ankle``). With ``compensate_feet`` the wrench of the
     ground on the foot is that wrench plus the foot's weight at the foot's centre of mass
     (``w_ground = w_sensor + [m g ẑ, c × m g ẑ]``; static: the foot's acceleration is
-    neglected). The wrenches are summed about the world origin (``world_wrench``) and the ZMP is
-    where their horizontal moment vanishes on the ground plane ``z = height``
-    (``zero_moment_point``). Below ``min_normal_force`` of total vertical force (no contact)
-    the ZMP is undefined and the output is the mean of the sensor frames' projections.
+    neglected). The wrenches are summed about the world origin (``world_wrench``: total force
+    ``f``, torque ``τ``) and the ZMP is where their horizontal moment vanishes on the horizontal
+    plane ``z = h`` of the tick, ``h = plane_height(t)`` (``zero_moment_point``, thesis §2.2.1):
+
+        p_x = (h f_x − τ_y) / f_z,   p_y = (h f_y + τ_x) / f_z,   p_z = h.
+
+    On flat ground ``h`` is the floor's height (the ``height`` parameter, the input's default);
+    on stairs or platforms the plane follows the support (plug the planned ZMP's height). For
+    pure forces ``f_i`` applied at points ``c_i`` (``τ = Σ c_i × f_i``) this is
+
+        p_xy = Σ_i (f_iz c_i,xy − f_i,xy (c_iz − h)) / f_z:
+
+    vertical forces give the same horizontal point on every plane; a horizontal force moves it
+    along its line of action, by ``−f_i,xy (c_iz − h) / f_z``.
+    Below ``min_normal_force`` of total vertical force (no contact) the ZMP is undefined and the
+    output is the mean of the sensor frames' horizontal positions, on the plane.
 
     Parameters: ``sensors`` (names of the wrench inputs), ``frames`` (their Pinocchio frames,
     same order; TALOS: ``leg_left_6_joint``, ``leg_right_6_joint``), ``compensate_feet``,
-    ``height`` (ground plane, m), ``min_normal_force`` (N).
+    ``height`` (m, the default of ``plane_height``), ``min_normal_force`` (N).
     Inputs: ``robot`` (a RobotModel's state at the measured configuration), one wrench (6) per
-    sensor. Outputs: ``wrench`` (total ground wrench, world axes, torque about the origin),
-    ``zmp`` (3, world), ``normal_force`` (N).
+    sensor, ``plane_height`` (scalar, m; default ``height``). Outputs: ``wrench`` (total ground
+    wrench, world axes, torque about the origin), ``zmp`` (3, world), ``normal_force`` (N).
     """
 
     sensors = dg.Param(["ft_left_ankle", "ft_right_ankle"], kind="str_list", doc="wrench input names")
     frames = dg.Param(["leg_left_6_joint", "leg_right_6_joint"], kind="str_list", doc="sensor frames")
     compensate_feet = dg.Param(True, kind="bool", doc="add the weight of the body below each sensor")
-    height = dg.Param(0.0, kind="float", doc="height of the ground plane (m)")
+    height = dg.Param(0.0, kind="float", doc="the ZMP plane's height when plane_height is not plugged or set (m)")
     min_normal_force = dg.Param(10.0, kind="float", minimum=0.0, doc="below it the ZMP is undefined (N)")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
@@ -72,13 +84,15 @@ class ZmpEstimator(dg.Entity):
     robot = dg.Input(dtype=RobotState, doc="a RobotModel's state (measured configuration)")
 
     def configure(self) -> None:
-        """One wrench input per sensor."""
+        """One wrench input per sensor, and the plane's height (default: the ``height`` parameter)."""
         if len(self.sensors) != len(self.frames) or not self.sensors:
             raise dg.ParamError(f"{self.name}: give one frame per sensor", entity=self.name)
         for name in self.sensors:
-            if not name.isidentifier() or hasattr(type(self), name):
+            if not name.isidentifier() or hasattr(type(self), name) or name == "plane_height":
                 raise dg.ParamError(f"{self.name}: {name!r} cannot name an input", entity=self.name)
             self.declare(name, dg.Input(shape=(6,), doc="sensor wrench: [force, torque], sensor frame"))
+        self.declare("plane_height", dg.Input(shape=(), default=self.height,
+                                              doc="height h of the horizontal plane z = h of the ZMP (m)"))
         self._ids: tuple[object, list[int]] | None = None
         self._bodies: dict[tuple[object, int], tuple[int, np.ndarray, np.ndarray]] = {}
 
@@ -127,12 +141,12 @@ class ZmpEstimator(dg.Entity):
         """Total vertical contact force (N)."""
         return float(self.wrench(t)[2])
 
-    @dg.output(shape=(3,), depends=("wrench", "robot"), labels=("x", "y", "z"))
+    @dg.output(shape=(3,), depends=("wrench", "robot", "plane_height"), labels=("x", "y", "z"))
     def zmp(self, t: int) -> np.ndarray:
-        """The ZMP on the ground plane (world)."""
-        wrench = self.wrench(t)
+        """The ZMP on the plane ``z = plane_height`` (world)."""
+        wrench, height = self.wrench(t), float(self.plane_height(t))
         if wrench[2] >= self.min_normal_force:
-            return zero_moment_point(wrench, self.height)
+            return zero_moment_point(wrench, height)
         state: RobotState = self.robot(t)
         middle = np.mean([state.frame_placement(f).translation for f in self._frame_ids(state)], axis=0)
-        return np.array([middle[0], middle[1], self.height])
+        return np.array([middle[0], middle[1], height])
