@@ -1,5 +1,5 @@
-"""WalkingView: a walk in Rerun's 3D view (the planned footprints, the current support polygon, the
-planned and measured ZMP, the CoM and the DCM on the ground)."""
+"""WalkingView: a walk in Rerun's 3D view (the terrain, the planned footprints, the current support
+polygon, the planned and measured ZMP, the CoM and the DCM on the ground)."""
 
 from __future__ import annotations
 
@@ -12,8 +12,10 @@ from dgraph.entities.recording.rerun_stream import (
     RerunStream,
     open_stream_for,
 )
+from dgraph.entities.recording.robot_view import quaternions_xyzw
 from dgraph.entities.recording.stream_view import StreamView
 from dgraph.entities.walking.footsteps import SIDES, FootstepPlan, convex_hull
+from dgraph.entities.walking.terrain import Surface, Terrain, flat
 
 FOOT_COLORS = {"left": (40, 110, 230), "right": (230, 90, 40)}
 """The colour of each foot's footprints (RGB)."""
@@ -32,6 +34,8 @@ POINT_RADIUS = 0.015
 """Line half-widths and point radii, in metres."""
 INITIAL_LABEL = "start"
 """The label of the initial footprints (a footstep's is its index in the plan)."""
+TERRAIN_COLORS = ((158, 128, 97), (128, 102, 76))
+"""The colours of the terrain's boxes (RGB), alternating along its surfaces as in the MuJoCo scenes."""
 
 
 def closed_strip(vertices: np.ndarray) -> np.ndarray:
@@ -55,39 +59,60 @@ def footprint_strips(plan: FootstepPlan) -> dict[str, tuple[list[np.ndarray], li
 
 def support_polygon(plan: FootstepPlan, time: float) -> tuple[np.ndarray, float]:
     """The support polygon at plan time ``time`` (s) as a closed strip (k + 1, 3) and the ground
-    height: the convex hull (counter-clockwise, no collinear vertex) of the horizontal corners of
-    the stance soles (``plan.sole.corners`` of ``plan.stance_placements(time)``), at the mean
-    height of the stance sole origins."""
+    height: the convex hull (counter-clockwise, no collinear vertex) of the horizontal projections
+    of the stance soles' corners (``plan.sole.corners`` of ``plan.stance_placements(time)``),
+    each hull vertex at the height of its corner (on a tread or a tilted pad the outline of a
+    sole in single support is the sole's own); the ground height ``z_g`` is the mean height of
+    the stance sole origins."""
     stance = plan.stance_placements(time).values()
-    corners = np.vstack([plan.sole.corners(placement)[:, :2] for placement in stance])
+    corners = np.vstack([plan.sole.corners(placement) for placement in stance])
     ground = float(np.mean([placement[2, 3] for placement in stance]))
-    hull = convex_hull(corners)
-    return closed_strip(np.column_stack([hull, np.full(len(hull), ground)])), ground
+    hull = convex_hull(corners[:, :2])
+    nearest = np.linalg.norm(hull[:, None, :] - corners[None, :, :2], axis=2).argmin(axis=1)
+    return closed_strip(np.column_stack([hull, corners[nearest, 2]])), ground
+
+
+def surface_box(surface: Surface) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The centre (3,), half sizes (3,) and rotation (3, 3) of the box whose top face is the
+    bounded ``surface`` and which reaches the floor, the box :mod:`dgraph_sim.scenes` builds:
+    rotation ``R`` (the surface's), half sizes ``(a, b, d / 2)``, depth ``d = max_k z_k / n_z``
+    (``z_k`` the corners' heights, ``n`` the normal: the bottom face's highest corner on z = 0),
+    centre ``c - (d / 2) n``. A surface not above the floor is its rectangle alone (``d = 0``)."""
+    depth = max(float(surface.corners()[:, 2].max()), 0.0) / surface.normal[2]
+    half_sizes = np.array([*surface.half_extents, 0.5 * depth])
+    return surface.center - 0.5 * depth * surface.normal, half_sizes, surface.placement[:3, :3].copy()
 
 
 @dg.register
 class WalkingView(StreamView, dg.Entity):
     """Shows a walk in Rerun's 3D view, under the entity path ``path`` (default ``world/walking``).
 
+    Static, at the first tick (again if the plugged terrain changes): ``<path>/terrain``, the
+    terrain's bounded surfaces (not the floor: the :class:`~dgraph.entities.recording.RobotView`
+    draws one), each as the solid box that :mod:`dgraph_sim.scenes` puts under it
+    (:func:`surface_box`: its top face the surface, tilted with it, reaching the floor; labelled
+    with the surface's name, colours alternating). Nothing for a terrain without surfaces (the
+    default, the floor alone).
+
     Static, when a plan is first drawn (again if the plugged plan changes): every planned
     footprint, ``<path>/footprints/left`` and ``<path>/footprints/right`` (one colour per foot),
     a closed line strip through the four sole corners ``p + R c_k`` of
     :meth:`~dgraph.entities.walking.footsteps.SoleShape.corners` (5 vertices, the first one
     repeated), labelled ``start`` for the initial feet and with its index in ``plan.steps`` for a
-    footstep.
+    footstep, at the soles' real heights and tilts.
 
     Every ``decimation`` ticks (and at the first tick), on the ``tick`` and ``time`` timelines,
     at plan time ``s = t dt - plan.start`` (the :class:`~dgraph.entities.walking.FootstepPlanner`'s ``start``):
 
-    * ``<path>/support_polygon``: the convex hull of the corners of the stance soles
-      (``plan.stance_placements(s)``; both feet in double support), projected on the ground (the
-      mean height ``z_g`` of the stance sole origins), a closed line strip: the polygon the ZMP
-      must stay in (walking notes §1.9, item 3);
+    * ``<path>/support_polygon``: the convex hull of the horizontal projections of the corners
+      of the stance soles (``plan.stance_placements(s)``; both feet in double support), each
+      vertex at its corner's height, a closed line strip: the polygon the ZMP must stay in
+      (walking notes §1.9, item 3), on a tread or a tilted pad the stance sole's outline;
     * ``<path>/<input>``, for each point input plugged or set (an unplugged one is not drawn):
-      the point ``(x, y, z_g)`` of the input ``(x, y, z)``, the ground projection of the planned
-      ZMP, the measured ZMP, the planned CoM, the planned DCM (``xi = c + c_dot / omega``, thesis
-      Eqs. 2.27-2.28) and the measured CoM, each its own entity so that the viewer shows or hides it
-      alone.
+      the point ``(x, y, z_g)`` of the input ``(x, y, z)``, ``z_g`` the mean height of the stance
+      sole origins: the ground projection of the planned ZMP, the measured ZMP, the planned CoM,
+      the planned DCM (``xi = c + c_dot / omega``, thesis Eqs. 2.27-2.28) and the measured CoM,
+      each its own entity so that the viewer shows or hides it alone.
 
     Like the :class:`~dgraph.entities.recording.RobotView` it reads in :meth:`observe`, keeps
     what it read when the tick commits, buffers and sends every ``flush_every`` ticks (one
@@ -99,9 +124,10 @@ class WalkingView(StreamView, dg.Entity):
     :class:`~dgraph.entities.recording.Recorder`'s, ``save`` if ``rrd_path`` is given, else the
     session's default, nothing for the library), ``rrd_path``, ``flush_every``, ``dt`` (default:
     the graph's). Inputs: ``plan`` (:class:`~dgraph.entities.walking.footsteps.FootstepPlan`),
-    and, each optional, ``zmp_reference``, ``zmp_measured``, ``com_reference``,
-    ``dcm_reference``, ``com_measured`` (3, world). No outputs: the loop calls it every tick as
-    an observer.
+    ``terrain`` (:class:`~dgraph.entities.walking.terrain.Terrain`, default
+    :func:`~dgraph.entities.walking.terrain.flat`), and, each optional, ``zmp_reference``,
+    ``zmp_measured``, ``com_reference``, ``dcm_reference``, ``com_measured`` (3, world). No
+    outputs: the loop calls it every tick as an observer.
     """
 
     observes = True
@@ -115,6 +141,7 @@ class WalkingView(StreamView, dg.Entity):
         ) -> None: ...
 
     plan = dg.Input(dtype=FootstepPlan, doc="the footstep plan")
+    terrain = dg.Input(dtype=Terrain, default=flat(), doc="the terrain, drawn once (default: the floor alone)")
     zmp_reference = dg.Input(shape=(3,), default=np.zeros(3), doc="planned ZMP (world; drawn if plugged or set)")
     zmp_measured = dg.Input(shape=(3,), default=np.zeros(3), doc="measured ZMP (world; drawn if plugged or set)")
     com_reference = dg.Input(shape=(3,), default=np.zeros(3), doc="planned CoM (world; drawn if plugged or set)")
@@ -124,8 +151,9 @@ class WalkingView(StreamView, dg.Entity):
     def configure(self) -> None:
         """Resolve the sink and check the path; nothing is opened before the first tick."""
         self.configure_stream("world/walking")
-        self._staged: tuple[int, FootstepPlan, np.ndarray, dict[str, np.ndarray]] | None = None
+        self._staged: tuple[int, FootstepPlan, Terrain, np.ndarray, dict[str, np.ndarray]] | None = None
         self._drawn_plan: FootstepPlan | None = None
+        self._drawn_terrain: Terrain | None = None
         self._polygons: dict[int, tuple[np.ndarray, float]] = {}  # by phase index, of _polygons_plan
         self._polygons_plan: FootstepPlan | None = None
         self._strips: list[np.ndarray] = []
@@ -147,8 +175,8 @@ class WalkingView(StreamView, dg.Entity):
 
     # -- tick -----------------------------------------------------------------------------
     def observe(self, t: int) -> None:
-        """Every ``decimation`` ticks, read the plan and the plugged points at ``t`` and compute
-        what is drawn; kept if the tick commits."""
+        """Every ``decimation`` ticks, read the plan, the terrain and the plugged points at ``t``
+        and compute what is drawn; kept if the tick commits."""
         if self.closed or self.rerun == "off":
             return
         if self._stream is None:
@@ -166,7 +194,7 @@ class WalkingView(StreamView, dg.Entity):
             if inp.source is not None or inp.is_set:
                 x, y, _ = inp(t)
                 points[name] = np.array([x, y, ground])
-        self._staged = (t, plan, strip, points)
+        self._staged = (t, plan, self.terrain(t), strip, points)
 
     def _support_polygon(self, plan: FootstepPlan, time: float) -> tuple[np.ndarray, float]:
         """:func:`support_polygon`, computed once per phase of the plan."""
@@ -178,11 +206,14 @@ class WalkingView(StreamView, dg.Entity):
         return self._polygons[phase]
 
     def commit_state(self, t_next: int) -> None:
-        """The tick committed: draw a new plan's footprints, buffer the tick, send every ``flush_every``."""
+        """The tick committed: draw a new terrain and a new plan's footprints, buffer the tick,
+        send every ``flush_every``."""
         staged, self._staged = self._staged, None
         if staged is None or self._stream is None:
             return
-        t, plan, strip, points = staged
+        t, plan, terrain, strip, points = staged
+        if terrain is not self._drawn_terrain:
+            self._log_terrain(terrain)
         if plan is not self._drawn_plan:
             self._log_footprints(plan)
         self._ticks.append(t)
@@ -195,6 +226,23 @@ class WalkingView(StreamView, dg.Entity):
             self._last_send = t
         if t - self._last_send >= self.flush_every:
             self._send()
+
+    def _log_terrain(self, terrain: Terrain) -> None:
+        """Log the boxes of the terrain's bounded surfaces (none drawn before and none now: nothing)."""
+        stream = self._stream
+        assert stream is not None
+        surfaces = [surface for surface in terrain.surfaces if surface.bounded]
+        drawn, self._drawn_terrain = self._drawn_terrain, terrain
+        if not surfaces and (drawn is None or not drawn.surfaces):
+            return
+        centers, half_sizes, rotations = np.zeros((len(surfaces), 3)), np.zeros((len(surfaces), 3)), []
+        for k, surface in enumerate(surfaces):
+            centers[k], half_sizes[k], rotation = surface_box(surface)
+            rotations.append(rotation)
+        stream.rec.log(f"{self.path}/terrain", stream._rr.Boxes3D(
+            centers=centers, half_sizes=half_sizes, quaternions=quaternions_xyzw(np.reshape(rotations, (-1, 3, 3))),
+            colors=[TERRAIN_COLORS[k % 2] for k in range(len(surfaces))], labels=[s.name for s in surfaces],
+            fill_mode="solid"), static=True)
 
     def _log_footprints(self, plan: FootstepPlan) -> None:
         stream = self._stream
