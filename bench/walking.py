@@ -247,7 +247,7 @@ def gait(walk: Walk, mask: np.ndarray) -> dict[str, object]:
     swings = {side: data[f"schedule.{side}_swing"].astype(bool)[mask] for side in SIDES}
     model = load_model("talos")
     work, positive = mechanical_energy(data["device.joint_torque"][mask], data["device.v"][mask, 6:], dt)
-    distance = float(np.linalg.norm(plan.final_midpoint()[:2] - plan.phases[0].zmp_from))
+    distance = float(np.linalg.norm(plan.final_midpoint()[:2] - plan.phases[0].zmp_from[:2]))
     return {
         "energy": (work, positive), "distance": distance,
         "cot": tuple(cost_of_transport(energy, robot_mass(), distance) for energy in (work, positive)),

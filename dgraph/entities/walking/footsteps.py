@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from dgraph.entities.references.minimum_jerk import minimum_jerk
 from dgraph.signals.value_types import value_type
 
 if TYPE_CHECKING:  # terrain imports this module
@@ -165,7 +166,16 @@ class FootstepPlan:
     double support linear from the previous support's centre to the next one's; the initial
     double support from the midpoint of the two sole centres to the first stance sole's centre,
     the final one from the last stance sole's centre to the final midpoint; after the end the
-    final midpoint.
+    final midpoint. The reference is a point in space (the sole centres with their heights): the
+    MPC tracks its horizontal part; its height (:meth:`zmp_height`) is the plane the ZMP is
+    constrained in. On flat ground that is the ground. In a double support between two heights
+    (a stair, a pad) it is the horizontal plane through the point moving on the segment from
+    the previous stance sole centre to the next, and the support polygon (:meth:`support_polygon`)
+    is the convex hull of both soles projected onto it: the ZMP of contact forces normal to
+    horizontal soles is the force-weighted mean of their points of application, inside that hull
+    on any horizontal plane, and a tangential force ``f_t`` at a sole ``dz`` away from the plane
+    moves it by ``f_t dz / f_n`` (at most ``mu dz``). The CoM is carried over
+    :meth:`support_height`, a smooth profile of the stance heights.
 
     Raises ValueError (naming the step index) on construction for a bad side, a placement that is
     not a rigid transform, ``single_support <= 0``, ``double_support < 0``, a last double support
@@ -186,6 +196,7 @@ class FootstepPlan:
     _starts: list[float] = field(init=False, repr=False)
     _zmp_table: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] = field(init=False, repr=False)
     _polygons: dict[int, tuple[np.ndarray, np.ndarray, float]] = field(init=False, repr=False)
+    _support_keyframes: tuple[list[float], list[float]] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         set_field = object.__setattr__
@@ -205,6 +216,18 @@ class FootstepPlan:
                                        np.array([phase.zmp_from for phase in phases]),
                                        np.array([phase.zmp_to for phase in phases])))
         set_field(self, "_polygons", {})
+        set_field(self, "_support_keyframes", self._keyframes())
+
+    def _keyframes(self) -> tuple[list[float], list[float]]:
+        """The keyframes of :meth:`support_height`: times (s, increasing) and heights (m)."""
+        times, heights = [0.0], [float(self._midpoint(self._feet[0])[2])]
+        for phase in self.phases:
+            if phase.kind == "single":
+                times.append(0.5 * (phase.start + phase.end))
+                heights.append(float(phase.zmp_from[2]))
+        times.append(self.duration)
+        heights.append(float(self.final_midpoint()[2]))
+        return times, heights
 
     def _validate(self) -> None:
         """ValueError on the first problem, naming the step (see the class docstring)."""
@@ -236,20 +259,20 @@ class FootstepPlan:
         feet = {"left": self.initial_left, "right": self.initial_right}
         centre = self.sole.center
         start_midpoint = self._midpoint(feet)
-        first_stance = centre(feet[other_side(self.steps[0].side)])[:2]
+        first_stance = centre(feet[other_side(self.steps[0].side)])
         time = self.initial_double_support
         phases = [Phase("double", 0.0, time, SIDES, None, None, None, start_midpoint, first_stance)]
         feet_per_phase = [dict(feet)]
         for index, step in enumerate(self.steps):
             stance = other_side(step.side)
-            support = centre(feet[stance])[:2]
+            support = centre(feet[stance])
             phases.append(Phase("single", time, time + step.single_support, (stance,), step.side, feet[step.side],
                                 step.placement, support, support))
             feet_per_phase.append(dict(feet))
             time += step.single_support
             feet[step.side] = step.placement
             if index + 1 < len(self.steps):
-                next_support = centre(feet[other_side(self.steps[index + 1].side)])[:2]
+                next_support = centre(feet[other_side(self.steps[index + 1].side)])
             else:
                 next_support = self._midpoint(feet)
             phases.append(Phase("double", time, time + step.double_support, SIDES, None, None, None, support,
@@ -259,8 +282,8 @@ class FootstepPlan:
         return tuple(phases), tuple(feet_per_phase)
 
     def _midpoint(self, feet: Mapping[str, np.ndarray]) -> np.ndarray:
-        """(2,) the horizontal midpoint of the two sole centres."""
-        return 0.5 * (self.sole.center(feet["left"]) + self.sole.center(feet["right"]))[:2]
+        """(3,) the midpoint of the two sole centres."""
+        return 0.5 * (self.sole.center(feet["left"]) + self.sole.center(feet["right"]))
 
     # -- queries -----------------------------------------------------------------------------
     def phase_index(self, time: float) -> int:
@@ -292,6 +315,26 @@ class FootstepPlan:
     def zmp_reference(self, times: np.ndarray) -> np.ndarray:
         """(n, 2) the ZMP reference at ``times`` (s): ``z_from + x (z_to - z_from)`` in the phase
         at each time, ``x`` its progress (see the class docstring)."""
+        return self._zmp_points(times)[:, :2]
+
+    def zmp_height(self, times: np.ndarray) -> np.ndarray:
+        """(n,) the height of the plane the ZMP is in at ``times`` (s): that of the reference point
+        moving on the segment between the phase's sole centres, as :meth:`zmp_reference` moves
+        (in single support the stance sole centre's height; in a double support between two
+        heights linear from the previous support's to the next one's; see the class docstring)."""
+        return self._zmp_points(times)[:, 2]
+
+    def zmp_height_at(self, time: float) -> tuple[float, float]:
+        """:meth:`zmp_height` at one ``time`` (s) and its time derivative (m/s: the slope of a double
+        support between two heights, else 0)."""
+        phase = self.phases[self.phase_index(time)]
+        rise = float(phase.zmp_to[2] - phase.zmp_from[2])
+        if rise == 0.0 or phase.duration <= 0.0 or not phase.start <= time < phase.end:
+            return float(phase.zmp_to[2] if time >= phase.end else phase.zmp_from[2]), 0.0
+        return float(phase.zmp_from[2]) + rise * (time - phase.start) / phase.duration, rise / phase.duration
+
+    def _zmp_points(self, times: np.ndarray) -> np.ndarray:
+        """(n, 3) the reference point ``p_from + x (p_to - p_from)`` of the phase at each time."""
         times = np.asarray(times, dtype=float).reshape(-1)
         starts, ends, zmp_from, zmp_to = self._zmp_table
         index = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, len(starts) - 1)
@@ -299,6 +342,25 @@ class FootstepPlan:
         reached = (times >= ends[index]).astype(float)  # the progress of a zero-length phase
         progress = np.clip(np.divide(times - starts[index], length, out=reached, where=length > 0.0), 0.0, 1.0)
         return zmp_from[index] + progress[:, None] * (zmp_to[index] - zmp_from[index])
+
+    def support_height(self, time: float) -> tuple[float, float, float]:
+        """The height ``g`` of the support the CoM is carried over at ``time`` (s), and its first
+        two time derivatives: a minimum-jerk move between the keyframes ``(0, initial midpoint
+        height)``, ``(middle of each single support, stance sole centre height)`` and ``(duration,
+        final midpoint height)``, constant before the first and after the last. The CoM rises or
+        descends with it from the middle of one single support to the middle of the next, so over
+        a 10 cm stair with 1.6 s single and 0.3 s double supports its vertical acceleration stays
+        below 5.8 x 0.1 / 1.9^2 = 0.16 m/s^2 (1.6 % of g, which the LIPM neglects)."""
+        times, heights = self._support_keyframes
+        k = bisect.bisect_right(times, time)
+        if k == 0:
+            return float(heights[0]), 0.0, 0.0
+        if k == len(times):
+            return float(heights[-1]), 0.0, 0.0
+        span = times[k] - times[k - 1]
+        change = heights[k] - heights[k - 1]
+        s, ds, dds = minimum_jerk((time - times[k - 1]) / span)
+        return float(heights[k - 1] + change * s), float(change * ds / span), float(change * dds / span**2)
 
     def support_polygon(self, time: float, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Half-planes ``(A (m, 2), b (m,))``, ``A z <= b``, of the support polygon at ``time``: the
@@ -591,14 +653,27 @@ def _straight_targets(initial_left: np.ndarray, initial_right: np.ndarray, steps
     return targets
 
 
+GAITS = ("alternate", "step_to")
+"""How :func:`terrain_walk` lays its footsteps: those of :func:`straight_walk`, or a step-to gait."""
+
+
 def terrain_walk(terrain: Terrain, initial_left: np.ndarray, initial_right: np.ndarray, *, steps: int,
                  length: float, width: float | None = None, first_side: str = "left", half_first: bool = True,
                  half_last: bool = True, single_support: float = 0.9, double_support: float = 0.115,
                  initial_double_support: float = 1.0, final_double_support: float = 1.0,
-                 sole: SoleShape = SoleShape(), margin: float = 0.0) -> FootstepPlan:
+                 sole: SoleShape = SoleShape(), margin: float = 0.0, gait: str = "alternate",
+                 lateral_offset: float = 0.0) -> FootstepPlan:
     """:func:`straight_walk` on a terrain: the same footsteps in the horizontal plane and the same
-    timing (every argument but ``terrain`` and ``margin`` as there), each footstep put on the
-    surface under its sole centre (:meth:`Terrain.surface_under`).
+    timing (every argument but ``terrain``, ``margin`` and ``gait`` as there), each footstep put on
+    the surface under its sole centre (:meth:`Terrain.surface_under`).
+
+    ``gait``: ``alternate`` (:func:`straight_walk`'s footsteps, the feet passing each other, so
+    on stairs one tread per footstep and two per stride) or ``step_to`` (``steps`` times: the
+    ``first_side`` foot moves ``length`` ahead of both, then the other joins it side by side;
+    ``2 steps`` footsteps, on stairs one tread per pair, the way a careful climber goes:
+    ``half_first`` and ``half_last`` are not read). ``lateral_offset`` (m) moves every footstep
+    that far to the left of the walk's line (the first steps step sideways by it): the tilted
+    platforms' pads are not symmetric about the robot's path.
 
     A flat footstep of heading ``h`` (its x axis) and sole centre ``(c_x, c_y)``
     (:meth:`SoleShape.center`) on the surface of normal ``n`` becomes the sole frame ``R = [x, y, n]``
@@ -611,16 +686,43 @@ def terrain_walk(terrain: Terrain, initial_left: np.ndarray, initial_right: np.n
     not all on that surface, at least ``margin`` (m) inside its edges (:meth:`Surface.contains`)
     with no higher surface over any of them (the foot straddles an edge, e.g. a stair's: change
     ``length`` or the terrain's ``start``), or if there is no surface under a sole centre.
-
-    Not handled yet: the ZMP and CoM over changing heights. The plan's ZMP reference is horizontal
-    and the pattern generator still plans the CoM at one height, so a walk up stairs or onto
-    platforms has its footsteps on the terrain but not a CoM that climbs with them.
     """
-    targets = _straight_targets(initial_left, initial_right, steps, length, width, first_side, half_first, half_last)
+    if gait == "step_to":
+        targets = _step_to_targets(initial_left, initial_right, steps, length, width, first_side)
+    elif gait == "alternate":
+        targets = _straight_targets(initial_left, initial_right, steps, length, width, first_side, half_first,
+                                    half_last)
+    else:
+        raise ValueError(f"gait must be one of {', '.join(GAITS)}, got {gait!r}")
+    yaw = _WalkFrame.of(initial_left, initial_right, width).yaw
+    shift = lateral_offset * np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+    targets = [(side, _translated(placement, shift)) for side, placement in targets]
     on_terrain = [(side, _on_surface(terrain, placement, sole, margin, index))
                   for index, (side, placement) in enumerate(targets)]
     return _plan(initial_left, initial_right, on_terrain, single_support, double_support, initial_double_support,
                  final_double_support, sole)
+
+
+def _translated(placement: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    """``placement`` moved by ``shift`` (3, world)."""
+    moved = np.array(placement, dtype=float)
+    moved[:3, 3] += shift
+    return moved
+
+
+def _step_to_targets(initial_left: np.ndarray, initial_right: np.ndarray, steps: int, length: float,
+                     width: float | None, first_side: str) -> list[tuple[str, np.ndarray]]:
+    """The footsteps (side, flat placement) of a step-to gait: ``steps`` times the ``first_side``
+    foot ``length`` ahead of the foremost foot, then the other beside it."""
+    _check_count(steps)
+    _check_side(first_side)
+    frame = _WalkFrame.of(initial_left, initial_right, width)
+    along = max(frame.along(initial_left), frame.along(initial_right))
+    targets = []
+    for _ in range(steps):
+        along += length
+        targets += [(side, frame.sole(side, along)) for side in (first_side, other_side(first_side))]
+    return targets
 
 
 def _on_surface(terrain: Terrain, placement: np.ndarray, sole: SoleShape, margin: float, index: int) -> np.ndarray:

@@ -85,17 +85,26 @@ class ZmpPatternGenerator(dg.Entity):
 
     Between re-plans every output is the last plan evaluated exactly (constant jerk
     ``u`` over each sample: ``c`` cubic in time), with ``h = com_height``, ``omega = sqrt(g/h)``,
-    ``z_g`` the ground (the mean height of the plan's initial soles)::
+    ``h`` the CoM height above the support::
 
-        com_position = [c, z_g + h]      com_velocity = [c_dot, 0]     com_acceleration = [c_ddot, 0]
-        zmp = [c - c_ddot / omega^2, z_g]                 (Eq. 2.22)  zmp_velocity = [c_dot - u / omega^2, 0]
-        dcm = [c + c_dot / omega, z_g + h]                (Eq. 2.27)  dcm_velocity = [c_dot + c_ddot / omega, 0]
+        com_position = [c, g + h]        com_velocity = [c_dot, g_dot]  com_acceleration = [c_ddot, g_ddot]
+        zmp = [c - c_ddot / omega^2, z_p]                 (Eq. 2.22)  zmp_velocity = [c_dot - u / omega^2, z_p_dot]
+        dcm = [c + c_dot / omega, g + h]                  (Eq. 2.27)  dcm_velocity = [c_dot + c_ddot / omega, g_dot]
+
+    with ``g(tau)`` the plan's support height (``FootstepPlan.support_height``: a minimum-jerk
+    profile through the stance soles' heights, from the middle of one single support to the
+    middle of the next, so the CoM climbs stairs and platforms with the feet; constant on flat
+    ground) and ``z_p(tau)`` the height of the plane the ZMP is constrained in
+    (``FootstepPlan.zmp_height``: the stance sole's in single support, linear between the two
+    soles' in a double support between two heights; the polygons are the soles projected onto
+    it, see ``FootstepPlan``). The MPC keeps ``omega`` of the constant ``h``: the vertical CoM
+    acceleration ``g_ddot`` it neglects is below 0.16 m/s^2 (1.6 % of g) on the 10 cm stairs.
 
     A CoM height ``h`` other than the estimate's ``h0`` at the first re-plan (tick ``t0``) is
     reached in ``D = height_transition`` s, by minimum jerk ``s(x) = 10 x^3 - 15 x^4 + 6 x^5``,
     ``x = (t - t0) dt / D`` (``D = 0``: at once)::
 
-        com_position_z = dcm_z = z_g + h + (h0 - h) (1 - s(x))
+        com_position_z = dcm_z = g + h + (h0 - h) (1 - s(x))
         com_velocity_z = dcm_velocity_z = -(h0 - h) s'(x) / D      com_acceleration_z = -(h0 - h) s''(x) / D^2
 
     while the MPC plans with ``h`` (``omega``) throughout: the transition is for the standing
@@ -117,7 +126,7 @@ class ZmpPatternGenerator(dg.Entity):
     Inputs: ``plan`` (FootstepPlan), ``estimated_com_position``, ``estimated_com_velocity`` (3).
     Outputs: ``com_plan`` (the :class:`ComPlan` followed), ``com_position``, ``com_velocity``,
     ``com_acceleration``, ``zmp``, ``zmp_velocity``, ``dcm``, ``dcm_velocity`` (3 each, world
-    axes), ``status``, ``iterations``, ``solve_time`` (of the latest re-plan).
+    axes), ``zmp_plane_height`` (``z_p``), ``status``, ``iterations``, ``solve_time`` (of the latest re-plan).
     """
 
     has_state = True
@@ -155,7 +164,7 @@ class ZmpPatternGenerator(dg.Entity):
         self._polygons: SupportPolygons | None = None
         self._references_key: tuple[int, ComPlan] | None = None
         self._references = np.zeros((7, 3))
-        self._ground = 0.0
+        self._height = 0.0
         self._height_change: tuple[int, float] = (0, 0.0)
 
     # -- re-planning ----------------------------------------------------------------------------
@@ -231,8 +240,8 @@ class ZmpPatternGenerator(dg.Entity):
         """The MPC, made at the first re-plan ``t`` (its CoM height: the parameter, else the
         estimate's height above the ground then, whose difference to it the transition removes)."""
         if self._mpc is None:
-            self._ground = plan.ground_height()
-            height = self.com_height if self.com_height is not None else measured[0, 2] - self._ground
+            ground = plan.ground_height()
+            height = self.com_height if self.com_height is not None else measured[0, 2] - ground
             if not height > 0:
                 raise dg.ParamError(f"{self.name} ({self.type_name}): the CoM height above the ground must be > 0, "
                                     f"got {height}",
@@ -240,19 +249,17 @@ class ZmpPatternGenerator(dg.Entity):
             self._mpc = LipmMpc(height, sampling=self.sampling, horizon=self.horizon, alpha=self.alpha,
                                 beta=self.beta, gamma=self.gamma, max_edges=MAX_EDGES, gravity=GRAVITY)
             self._reference_maps(self._mpc.omega, height)
-            self._height_change = (t, measured[0, 2] - self._ground - height)
+            self._height_change = (t, measured[0, 2] - ground - height)
         return self._mpc
 
     def _reference_maps(self, omega: float, height: float) -> None:
-        """The references as ``[horizontal @ [c, c_dot, c_ddot, u], vertical]``: the rows of
-        :meth:`_sample` (the equations of the class docstring)."""
+        """The horizontal references as ``horizontal @ [c, c_dot, c_ddot, u]``: the rows of
+        :meth:`_sample` (the equations of the class docstring); the CoM height ``h``."""
         inverse, inverse_square = 1.0 / omega, 1.0 / omega**2
         self._horizontal = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0],
                                      [1.0, 0.0, -inverse_square, 0.0], [0.0, 1.0, 0.0, -inverse_square],
                                      [1.0, inverse, 0.0, 0.0], [0.0, 1.0, inverse, 0.0]])
-        self._vertical = np.zeros((7, 3))
-        self._vertical[[0, 5], 2] = self._ground + height
-        self._vertical[3, 2] = self._ground
+        self._height = height
 
     # -- tick transition ------------------------------------------------------------------------
     def prepare_state(self, t: int) -> None:
@@ -271,13 +278,24 @@ class ZmpPatternGenerator(dg.Entity):
         key = self._references_key
         if key is not None and key[0] == t and key[1] is com_plan:
             return self._references
-        references = self._vertical.copy()
-        self._add_height_transition(t, references[:, 2])
+        references = np.empty((7, 3))
+        references[:, 2] = self._vertical(t)
         references[:, :2] = self._horizontal @ com_plan.trajectory.sample((t - com_plan.start_tick) * self.dt)
         self._references_key, self._references = (t, com_plan), references
         return references
 
-    def _add_height_transition(self, t: int, vertical: np.ndarray) -> None:
+    def _vertical(self, t: int) -> list[float]:
+        """The seven vertical references of tick ``t`` (the class docstring's z components)."""
+        plan = self.plan(t)
+        time = plan.time(t * self.dt)
+        ground, ground_rate, ground_acceleration = plan.support_height(time)
+        zmp_height, zmp_rate = plan.zmp_height_at(time)
+        com = ground + self._height
+        vertical = [com, ground_rate, ground_acceleration, zmp_height, zmp_rate, com, ground_rate]
+        self._add_height_transition(t, vertical)
+        return vertical
+
+    def _add_height_transition(self, t: int, vertical: list[float]) -> None:
         """Add to the seven vertical references what remains of the height transition at ``t``
         (the class docstring's ``(h0 - h) (1 - s(x))`` and its derivatives)."""
         first_tick, change = self._height_change
@@ -286,43 +304,50 @@ class ZmpPatternGenerator(dg.Entity):
         if change == 0.0 or elapsed >= duration:
             return
         s, ds, dds = minimum_jerk(max(elapsed, 0.0) / duration)
-        vertical[[0, 5]] += change * (1.0 - s)
-        vertical[[1, 6]] -= change * ds / duration
+        for row in (0, 5):
+            vertical[row] += change * (1.0 - s)
+        for row in (1, 6):
+            vertical[row] -= change * ds / duration
         vertical[2] -= change * dds / duration**2
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def com_position(self, t: int) -> np.ndarray:
-        """Planned CoM ``[c, z_g + h]`` (z in the height transition: the class docstring)."""
+        """Planned CoM ``[c, g + h]`` (z in the height transition: the class docstring)."""
         return self._sample(t)[0]
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def com_velocity(self, t: int) -> np.ndarray:
-        """Planned CoM velocity ``[c_dot, 0]`` (z in the height transition: the class docstring)."""
+        """Planned CoM velocity ``[c_dot, g_dot]`` (z in the height transition: the class docstring)."""
         return self._sample(t)[1]
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def com_acceleration(self, t: int) -> np.ndarray:
-        """Planned CoM acceleration ``[c_ddot, 0]`` (z: as ``com_velocity``)."""
+        """Planned CoM acceleration ``[c_ddot, g_ddot]`` (z: as ``com_velocity``)."""
         return self._sample(t)[2]
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def zmp(self, t: int) -> np.ndarray:
-        """Planned ZMP ``[c - c_ddot / omega^2, z_g]`` (Eq. 2.22)."""
+        """Planned ZMP ``[c - c_ddot / omega^2, z_p]`` (Eq. 2.22; ``z_p`` the plane it is in)."""
         return self._sample(t)[3]
+
+    @dg.output(shape=(), depends=("t", "com_plan"))
+    def zmp_plane_height(self, t: int) -> float:
+        """``z_p``: the height of the plane the planned ZMP is in (m; for a ZMP estimator's plane)."""
+        return float(self._sample(t)[3, 2])
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def zmp_velocity(self, t: int) -> np.ndarray:
-        """Its time derivative ``[c_dot - u / omega^2, 0]``."""
+        """Its time derivative ``[c_dot - u / omega^2, z_p_dot]``."""
         return self._sample(t)[4]
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def dcm(self, t: int) -> np.ndarray:
-        """Planned DCM ``[c + c_dot / omega, z_g + h]`` (Eq. 2.27; z: the CoM's)."""
+        """Planned DCM ``[c + c_dot / omega, g + h]`` (Eq. 2.27; z: the CoM's)."""
         return self._sample(t)[5]
 
     @dg.output(shape=(3,), depends=("t", "com_plan"), labels=("x", "y", "z"))
     def dcm_velocity(self, t: int) -> np.ndarray:
-        """Its time derivative ``[c_dot + c_ddot / omega, 0]`` (z: the CoM's)."""
+        """Its time derivative ``[c_dot + c_ddot / omega, g_dot]`` (z: the CoM's)."""
         return self._sample(t)[6]
 
     @dg.output(shape=(), dtype="int", depends=("com_plan",))

@@ -12,18 +12,22 @@ import dgraph as dg
 from dgraph.entities.estimators.leg_odometry import frame_id, standing_configuration
 from dgraph.entities.robot.loading import has_free_flyer, load_model
 from dgraph.entities.walking.footsteps import (
+    GAITS,
     FootstepPlan,
     footstep_from_plain,
     lateral_walk,
     straight_walk,
+    terrain_walk,
     turning_walk,
 )
+from dgraph.entities.walking.terrain import Terrain, flat
 
 TIMING = ("single_support", "double_support", "initial_double_support", "final_double_support")
 """The durations every walk takes."""
 
 WALK_PARAMETERS: dict[str, tuple[str, ...]] = {
-    "straight": ("steps", "length", "width", "first_side", "half_first", "half_last", *TIMING),
+    "straight": ("steps", "length", "width", "first_side", "half_first", "half_last", "terrain", "gait",
+                 "lateral_offset", *TIMING),
     "lateral": ("steps", "length", "width", *TIMING),
     "turning": ("steps", "angle_per_step", "length", "width", "first_side", *TIMING),
     "explicit": ("footsteps", *TIMING),
@@ -31,7 +35,7 @@ WALK_PARAMETERS: dict[str, tuple[str, ...]] = {
 """The parameters each kind of walk reads (another one given is refused)."""
 
 WALK_PARAMETER_NAMES = {"steps", "length", "width", "first_side", "half_first", "half_last", "angle_per_step",
-                        "footsteps", *TIMING}
+                        "footsteps", "terrain", "gait", "lateral_offset", *TIMING}
 
 
 def sole_placements(model: Any, left_frame: str, right_frame: str) -> tuple[np.ndarray, np.ndarray]:
@@ -59,7 +63,12 @@ class FootstepPlanner(dg.Entity):
     ``steps`` steps turning by ``angle_per_step`` rad, advancing ``length``, default 0) or
     ``explicit`` (``footsteps``: a list of ``{side, position: [x, y, z], yaw (rad, default 0),
     single_support?, double_support?}``, the durations defaulting to the parameters, the last
-    step's double support to ``final_double_support``). Plan time ``s = t dt - start``: the
+    step's double support to ``final_double_support``). A straight walk on a ``terrain`` (a name
+    of ``TERRAINS``, e.g. ``stairs10``, ``platforms``, ``obstacles``, as the device's scene of the
+    same name, or a terrain's plain data) is
+    :func:`~dgraph.entities.walking.footsteps.terrain_walk`'s: its footsteps on the surfaces, with
+    their heights and tilts, laid by ``gait`` (``alternate``, or ``step_to``: both feet on each
+    tread), moved ``lateral_offset`` m to the left. Plan time ``s = t dt - start``: the
     plan's phases are in plan time, tick ``start / dt`` is its time 0; the plan carries
     ``start``, so the entities that follow it (scheduler, pattern generator, swings, view) agree.
 
@@ -68,9 +77,11 @@ class FootstepPlanner(dg.Entity):
     on TALOS), ``first_side``, ``half_first``, ``half_last``, ``angle_per_step`` (rad),
     ``footsteps``, ``single_support`` (0.9 s), ``double_support`` (0.115 s),
     ``initial_double_support`` (1 s), ``final_double_support`` (1 s), ``start`` (s), ``model``,
-    ``left_frame``, ``right_frame`` (the sole frames), ``dt``. A parameter the chosen walk does
-    not read, or a plan the builder refuses, is a ParamError naming the parameter.
-    Outputs: ``plan`` (constant), ``time`` (``t dt - start``, s).
+    ``left_frame``, ``right_frame`` (the sole frames), ``terrain``, ``gait``, ``lateral_offset``, ``dt``. A parameter
+    the chosen walk does not read, or a plan the builder refuses, is a ParamError naming the
+    parameter.
+    Outputs: ``plan`` (constant), ``walked_terrain`` (constant: the terrain, the floor alone
+    if none is given), ``time`` (``t dt - start``, s).
     """
 
     walk = dg.Param("straight", kind="str", choices=("straight", "lateral", "turning", "explicit"),
@@ -91,6 +102,12 @@ class FootstepPlanner(dg.Entity):
     initial_double_support = dg.Param(1.0, kind="float", minimum=0.0, doc="double support before the first lift-off "
                                                                           "in s")
     final_double_support = dg.Param(1.0, kind="float", doc="double support after the last touch-down in s (> 0)")
+    terrain = dg.Param(None, kind="object", doc="straight: the terrain walked on, a name (stairs10, platforms, "
+                                                 "obstacles) or its plain data (default: the floor)")
+    gait = dg.Param("alternate", kind="str", choices=GAITS, doc="straight on a terrain: alternate, or step_to "
+                                                                "(both feet on each tread)")
+    lateral_offset = dg.Param(0.0, kind="float", doc="straight on a terrain: m the footsteps are moved to the left "
+                                                     "of the walk's line")
     start = dg.Param(0.0, kind="float", minimum=0.0, doc="time in s (t dt) at which the plan starts")
     model = dg.Param("talos", kind="name_or_path", doc="example-robot-data robot name, URDF path or pinocchio.Model")
     left_frame = dg.Param("left_sole_link", kind="str", doc="left sole frame (z = sole normal, origin on the sole)")
@@ -103,6 +120,7 @@ class FootstepPlanner(dg.Entity):
             first_side: Literal["left", "right"] | None = None, half_first: bool = True, half_last: bool = True,
             angle_per_step: float | None = None, footsteps: Any = None, single_support: float = 0.9,
             double_support: float = 0.115, initial_double_support: float = 1.0, final_double_support: float = 1.0,
+            terrain: Any = None, gait: Literal["alternate", "step_to"] = "alternate", lateral_offset: float = 0.0,
             start: float = 0.0, model: str | Any = "talos", left_frame: str = "left_sole_link",
             right_frame: str = "right_sole_link", dt: float | None = None,
         ) -> None: ...
@@ -117,6 +135,7 @@ class FootstepPlanner(dg.Entity):
         for param in ("left_frame", "right_frame"):
             frame_id(model, getattr(self, param), self.name, param, label)
         self.initial_left, self.initial_right = sole_placements(model, self.left_frame, self.right_frame)
+        self._terrain = self._read_terrain()
         self._plan = dataclasses.replace(self._build(), start=self.start)
 
     def _refuse(self, param: str, reason: str) -> dg.ParamError:
@@ -130,10 +149,22 @@ class FootstepPlanner(dg.Entity):
         needed = {"lateral": "length", "turning": "angle_per_step", "explicit": "footsteps"}.get(self.walk)
         if needed and getattr(self, needed) is None:
             raise self._refuse(needed, f"walk {self.walk!r} needs it")
+        for param in ("gait", "lateral_offset"):
+            if param in self.given_params and self.terrain is None:
+                raise self._refuse(param, "read only on a terrain (give the terrain parameter)")
         for param in ("single_support", "final_double_support", "width"):
             value = getattr(self, param)
             if value is not None and not value > 0.0:
                 raise self._refuse(param, f"must be > 0, got {value}")
+
+    def _read_terrain(self) -> Terrain:
+        """The ``terrain`` parameter as a Terrain (the floor if None); a ParamError naming it."""
+        if self.terrain is None:
+            return flat()
+        try:
+            return Terrain.from_plain(self.terrain)
+        except (TypeError, ValueError) as exc:
+            raise self._refuse("terrain", str(exc)) from None
 
     def _build(self) -> FootstepPlan:
         """The plan of ``walk``; a builder's refusal as a ParamError (``footsteps`` for an explicit
@@ -142,6 +173,10 @@ class FootstepPlanner(dg.Entity):
         optional = {name: getattr(self, name) for name in ("length", "first_side") if getattr(self, name) is not None}
         feet = (self.initial_left, self.initial_right)
         try:
+            if self.walk == "straight" and self.terrain is not None:
+                return terrain_walk(self._terrain, *feet, steps=self.steps, width=self.width,
+                                    half_first=self.half_first, half_last=self.half_last, gait=self.gait,
+                                    lateral_offset=self.lateral_offset, **optional, **timing)
             if self.walk == "straight":
                 return straight_walk(*feet, steps=self.steps, width=self.width, half_first=self.half_first,
                                      half_last=self.half_last, **optional, **timing)
@@ -169,6 +204,11 @@ class FootstepPlanner(dg.Entity):
     def plan(self, t: int) -> FootstepPlan:
         """The plan (constant)."""
         return self._plan
+
+    @dg.output(dtype=Terrain, depends=())
+    def walked_terrain(self, t: int) -> Terrain:
+        """The terrain walked on (constant)."""
+        return self._terrain
 
     @dg.output(shape=(), depends=("t",))
     def time(self, t: int) -> float:
