@@ -14,9 +14,9 @@ from dgraph.entities.walking.footsteps import (
 from dgraph.entities.walking.pattern_generator import ComPlan, ZmpPatternGenerator
 from dgraph.entities.walking.planner import FootstepPlanner
 from dgraph.entities.walking.scheduler import ContactScheduler
-from dgraph.entities.walking.swing import SwingPath, SwingTrajectory
+from dgraph.entities.walking.swing import SwingPath, SwingTrajectory, swing_clearance, swing_clearances
 from dgraph.entities.walking.terrain import TERRAINS, Surface, Terrain
 
 __all__ = ["TERRAINS", "ComPlan", "ContactScheduler", "Footstep", "FootstepPlan", "FootstepPlanner", "Phase",
            "SoleShape", "Surface", "SwingPath", "SwingTrajectory", "Terrain", "ZmpPatternGenerator", "lateral_walk",
-           "straight_walk", "terrain_walk", "turning_walk"]
+           "straight_walk", "swing_clearance", "swing_clearances", "terrain_walk", "turning_walk"]

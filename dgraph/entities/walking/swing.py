@@ -1,8 +1,10 @@
-"""Swing-foot trajectories: the path of a sole from lift-off to touch-down (:class:`SwingPath`) and
-the :class:`SwingTrajectory` entity that samples it for one foot along a footstep plan."""
+"""Swing-foot trajectories: the path of a sole from lift-off to touch-down (:class:`SwingPath`), the
+:class:`SwingTrajectory` entity that samples it for one foot along a footstep plan, and the
+clearance of swings over a terrain (:func:`swing_clearance`, :func:`swing_clearances`)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
@@ -12,7 +14,10 @@ import pinocchio as pin
 import dgraph as dg
 from dgraph.entities.references.minimum_jerk import minimum_jerk
 from dgraph.entities.robot.rotations import matrix_to_quat
-from dgraph.entities.walking.footsteps import FootstepPlan
+from dgraph.entities.walking.footsteps import FootstepPlan, SoleShape
+
+if TYPE_CHECKING:  # terrain imports footsteps, as this module does
+    from dgraph.entities.walking.terrain import Terrain
 
 _ZERO6 = np.zeros(6)
 _ZERO6.setflags(write=False)
@@ -136,8 +141,8 @@ class SwingTrajectory(dg.Entity):
     Parameters: ``side`` (``left`` or ``right``), ``height`` (m, default 0.05: the walking notes'
     §1.4 gap-filler, TSID's TALOS walking configuration; the thesis gives none), ``lift`` (a
     fraction of the swing in [0, 0.5), default 0: no normal phase, the flat walks' swing; mlp's
-    0.2 s of normal motion in a 1.4-1.6 s single support is 0.125-0.14, walking notes §1.3),
-    ``dt``.
+    0.2 s of normal motion in a 1.4-1.6 s single support is 0.125-0.14, walking notes §1.3;
+    :func:`swing_clearance` checks a choice against a terrain), ``dt``.
     Input: ``plan`` (FootstepPlan).
     Outputs: ``position`` (3), ``orientation`` (quaternion xyzw), ``velocity`` (6, ``[p_dot,
     omega]``), ``acceleration`` (6, ``[p_ddot, omega_dot]``), world axes.
@@ -211,3 +216,40 @@ class SwingTrajectory(dg.Entity):
         """``[p_ddot*, omega_dot*]``, world axes."""
         return self._sample(t)[3]
 
+
+def swing_clearance(path: SwingPath, terrain: Terrain, sole: SoleShape, samples: int = 200) -> float:
+    """The least height (m) of the sole's four corners above the terrain while it swings along
+    ``path``: at the progresses ``x = i / samples`` (``0 < i < samples``), each corner ``q`` of
+    ``sole`` at the path's placement counts ``q_z - h(q_x, q_y)``, ``h`` the height of the surface
+    under it (:meth:`Terrain.surface_under`; nothing under it: it does not count), except over
+    the two contact surfaces, those under the sole's centre at lift-off and at touch-down, where
+    the sole is meant to be close: there a corner counts only where it crosses onto or off the
+    surface (the surface under it differs at the previous or next progress: the top edge of a
+    step it passes over) or lies under it. ``math.inf`` if nothing counts (a swing over one surface
+    that stays above it). Sampled: an edge under the middle of a sole whose corners are over
+    lower ground, or crossed between two samples, is not seen; ``samples`` sets the spacing."""
+    placements = [path.at(x) for x in np.linspace(0.0, 1.0, samples + 1)]
+    contact = {terrain.surface_under(*sole.center(placement)[:2]) for placement in (path.start, path.end)}
+    least = math.inf
+    for local in sole.local_corners():
+        corners = [sample.position + sample.rotation @ local for sample in placements]
+        under = [terrain.surface_under(corner[0], corner[1]) for corner in corners]
+        for i in range(1, samples):
+            surface = under[i]
+            if surface is None:
+                continue
+            gap = corners[i][2] - surface.height_at(corners[i][0], corners[i][1])
+            crossing = surface is not under[i - 1] or surface is not under[i + 1]
+            if surface not in contact or crossing or gap < 0.0:
+                least = min(least, float(gap))
+    return least
+
+
+def swing_clearances(plan: FootstepPlan, terrain: Terrain, height: float, lift: float = 0.0,
+                     samples: int = 200) -> list[float]:
+    """:func:`swing_clearance` of each footstep's swing in ``plan`` (the :class:`SwingPath` that
+    :class:`SwingTrajectory` follows with these ``height`` and ``lift``), with the plan's sole, in
+    the order of the footsteps."""
+    return [swing_clearance(SwingPath(phase.swing_from, phase.swing_to, phase.duration, height, lift), terrain,
+                            plan.sole, samples)
+            for phase in plan.phases if phase.kind == "single"]
