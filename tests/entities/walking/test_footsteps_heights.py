@@ -10,7 +10,7 @@ import pytest
 from scipy.spatial import ConvexHull
 
 from dgraph.entities.walking.footsteps import GAITS, FootstepPlan, straight_walk, terrain_walk, yaw_placement
-from dgraph.entities.walking.terrain import Terrain, stairs, tilted_platforms
+from dgraph.entities.walking.terrain import Terrain, flat, stairs, tilted_platforms
 
 LEFT0 = yaw_placement([-0.009, 0.085, 0.0])
 RIGHT0 = yaw_placement([-0.009, -0.085, 0.0])
@@ -97,6 +97,19 @@ def test_the_lateral_offset_moves_every_footstep_sideways(gait, offset):
         shift = step.placement[:3, 3] - reference.placement[:3, 3]
         np.testing.assert_allclose(shift, [0.0, offset, 0.0], rtol=0.0, atol=1e-12)
         np.testing.assert_array_equal(step.placement[:3, :3], reference.placement[:3, :3])
+
+
+@pytest.mark.parametrize("gait", GAITS)
+@pytest.mark.parametrize("yaw", [0.7, -2.0])
+def test_the_lateral_offset_is_to_the_left_of_the_walks_heading(gait, yaw):
+    left = yaw_placement([1.0, 2.0, 0.0], yaw)
+    right = yaw_placement([1.0 + 0.17 * math.sin(yaw), 2.0 - 0.17 * math.cos(yaw), 0.0], yaw)
+    plan = terrain_walk(flat(), left, right, steps=3, length=0.2, gait=gait)
+    moved = terrain_walk(flat(), left, right, steps=3, length=0.2, gait=gait, lateral_offset=0.07)
+    to_the_left = 0.07 * np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+    for step, reference in zip(moved.steps, plan.steps, strict=True):
+        np.testing.assert_allclose(step.placement[:3, 3] - reference.placement[:3, 3], to_the_left, rtol=0.0,
+                                   atol=1e-12)
 
 
 def test_an_offset_that_puts_a_sole_over_a_treads_side_is_refused_naming_the_step():
