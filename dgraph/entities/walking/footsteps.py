@@ -657,8 +657,8 @@ GAITS = ("alternate", "step_to")
 """How :func:`terrain_walk` lays its footsteps: those of :func:`straight_walk`, or a step-to gait."""
 
 
-def terrain_walk(terrain: Terrain, initial_left: np.ndarray, initial_right: np.ndarray, *, steps: int,
-                 length: float, width: float | None = None, first_side: str = "left", half_first: bool = True,
+def terrain_walk(terrain: Terrain, initial_left: np.ndarray, initial_right: np.ndarray, *, steps: int = 6,
+                 length: float = 0.2, width: float | None = None, first_side: str = "left", half_first: bool = True,
                  half_last: bool = True, single_support: float = 0.9, double_support: float = 0.115,
                  initial_double_support: float = 1.0, final_double_support: float = 1.0,
                  sole: SoleShape = SoleShape(), margin: float = 0.0, gait: str = "alternate",
