@@ -64,6 +64,23 @@ def _na(entity: MujocoDevice) -> tuple[int]:
     return (entity.na,)
 
 
+CONES = {"pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL, "elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC}
+"""The friction cones of MuJoCo's contact solver, by name."""
+
+
+def _contact_option_problem(key: str, value: object) -> str | None:
+    """What is wrong with the contact-solver option ``key: value``, or None."""
+    if key == "cone":
+        return None if value in CONES else f"one of {', '.join(CONES)}, got {value!r}"
+    if key == "impratio":
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+        return None if ok else f"a number > 0, got {value!r}"
+    if key == "noslip_iterations":
+        ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
+        return None if ok else f"an integer >= 0, got {value!r}"
+    return "unknown option (known: cone, impratio, noslip_iterations)"
+
+
 def _port_name(body: str, prefix: str = "wrench_") -> str:
     """``<prefix><body>`` (``wrench_<body>``) with every character that is not a letter, digit or
     ``_`` replaced by ``_``."""
@@ -139,6 +156,12 @@ class MujocoDevice(dg.Device):
     :class:`~dgraph.entities.actuators.ActuatorModel`'s chain. Pinocchio's model is not changed:
     a controller built on it does not know the chain, which the actuator model compensates.
 
+    ``contact_solver``: MuJoCo contact options other than its defaults (pyramidal cone,
+    ``impratio`` 1, no no-slip pass), for this device's model only: ``cone`` (``pyramidal`` or
+    ``elliptic``), ``impratio`` (the ratio of frictional to normal constraint impedance: above 1,
+    friction is "harder", MuJoCo's remedy for the slow creep of its soft contacts under a
+    sustained tangential load, e.g. a foot on a 15-degree pad) and ``noslip_iterations``.
+
     ``viewer: true`` opens an interactive MuJoCo window (``mujoco.viewer.launch_passive``) at the
     first tick run, synced at ``viewer_fps`` and paced to the wall clock (:mod:`dgraph_sim.viewer`);
     :meth:`close` closes it. It needs a display (``DISPLAY`` or ``WAYLAND_DISPLAY``) that GLFW can
@@ -170,6 +193,8 @@ class MujocoDevice(dg.Device):
                   "on the floor, else the SRDF reference posture or the neutral one)")
     v0 = dg.Param(None, kind="vector", doc="initial velocity, nv (default: zeros)")
     dt = dg.Param(None, kind="float", minimum=1e-6, maximum=1.0, doc="time step in s (default: the graph's dt)")
+    contact_solver = dg.Param(None, kind="object", doc="MuJoCo contact options that differ from its defaults: "
+                              "{cone: pyramidal|elliptic, impratio: > 0, noslip_iterations: >= 0}")
     wrench_bodies = dg.Param([], kind="str_list", doc="bodies getting a wrench_<body> input (world frame, at CoM)")
     remove_bodies = dg.Param([], kind="str_list", doc="scene mocap bodies removed during the run (unannounced)")
     remove_times = dg.Param([], kind="vector", doc="time (s) at which each of remove_bodies is removed")
@@ -194,11 +219,11 @@ class MujocoDevice(dg.Device):
             mjcf_tolerance: float = 0.01, actuators: str | None = None, scene: str = "flat",
             collisions: Literal["feet", "all"] = "all", control_mode: Literal["torque", "position"] = "torque",
             kp: ArrayLike | None = None, kd: ArrayLike | None = None, q0: ArrayLike | None = None,
-            v0: ArrayLike | None = None, dt: float | None = None, wrench_bodies: Sequence[str] = (),
-            remove_bodies: Sequence[str] = (), remove_times: ArrayLike = (), remove_on: Sequence[str] = (),
-            fall_height: float | None = None, viewer: bool = False, viewer_fps: float = 30.0,
-            stop_on_fall: bool = False, video_path: str | None = None, video_fps: float = 25.0,
-            video_start: float = 0.0, video_size: Sequence[int] = (320, 240),
+            v0: ArrayLike | None = None, dt: float | None = None, contact_solver: Any = None,
+            wrench_bodies: Sequence[str] = (), remove_bodies: Sequence[str] = (), remove_times: ArrayLike = (),
+            remove_on: Sequence[str] = (), fall_height: float | None = None, viewer: bool = False,
+            viewer_fps: float = 30.0, stop_on_fall: bool = False, video_path: str | None = None,
+            video_fps: float = 25.0, video_start: float = 0.0, video_size: Sequence[int] = (320, 240),
             video_camera: Literal["robot", "track", "front"] = "robot",
         ) -> None: ...
 
@@ -218,6 +243,21 @@ class MujocoDevice(dg.Device):
                              "by the last valid one (0: the command was applied)")
 
     # -- construction -----------------------------------------------------------------------
+    def _set_contact_solver(self, options: mujoco.MjOption) -> None:
+        """Apply ``contact_solver`` to the model's options; a ParamError naming a bad entry."""
+        given = self.contact_solver or {}
+        if not isinstance(given, dict):
+            raise dg.ParamError(f"{self.name}: parameter 'contact_solver': expected a mapping, got {given!r}",
+                                entity=self.name)
+        for key, value in given.items():
+            problem = _contact_option_problem(key, value)
+            if problem:
+                raise dg.ParamError(f"{self.name}: parameter 'contact_solver': {key}: {problem}", entity=self.name)
+            if key == "cone":
+                options.cone = CONES[value]
+            else:
+                setattr(options, key, value)
+
     def configure(self) -> None:
         """Load the model (cached per process), size the ports, declare the sensor states the robot
         has and the wrench inputs."""
@@ -239,6 +279,7 @@ class MujocoDevice(dg.Device):
                                 entity=self.name) from None
         robot = self.sim.robot
         self.mj_model = copy.copy(self.sim.mj_model)  # own copy: the time step follows dt
+        self._set_contact_solver(self.mj_model.opt)
         # software (llvmpipe) rendering: multisampling costs 4-6x (0.6 s -> 0.1 s at 320x240)
         self.mj_model.vis.quality.offsamples = 0
         self.mj_model.vis.quality.shadowsize = 2048

@@ -486,3 +486,28 @@ def test_talos_has_acceleration_stage_sensors_and_no_extra_call(monkeypatch):
     g.run(duration=0.05)
     assert not dev._rne_post_constraint and counted.calls == 0
     assert dev.contact_force_total.value[2] > 0.9 * mass(dev, "base_link") * G  # MuJoCo's own, for the F/T sensors
+
+
+def test_contact_solver_options_reach_the_model_and_the_defaults_stay_mujocos():
+    g = dg.Graph(dt=0.001)
+    default = g.add(MujocoDevice("default"))
+    tuned = g.add(MujocoDevice("tuned", contact_solver={"cone": "elliptic", "impratio": 10.0,
+                                                        "noslip_iterations": 3}))
+    assert default.mj_model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL
+    assert default.mj_model.opt.impratio == 1.0 and default.mj_model.opt.noslip_iterations == 0
+    assert tuned.mj_model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    assert tuned.mj_model.opt.impratio == 10.0 and tuned.mj_model.opt.noslip_iterations == 3
+    assert default.sim.mj_model.opt.cone == mujoco.mjtCone.mjCONE_PYRAMIDAL  # the cached model is not touched
+
+
+@pytest.mark.parametrize(("options", "message"), [
+    ({"cone": "conical"}, "cone: one of pyramidal, elliptic"),
+    ({"impratio": 0.0}, "impratio: a number > 0"),
+    ({"noslip_iterations": 1.5}, "noslip_iterations: an integer >= 0"),
+    ({"tolerance": 1e-9}, "tolerance: unknown option"),
+    (["cone", "elliptic"], "expected a mapping"),
+])
+def test_a_bad_contact_solver_option_is_a_param_error_naming_it(options, message):
+    with pytest.raises(dg.ParamError, match=message) as error:
+        dg.Graph(dt=0.001).add(MujocoDevice("sim", contact_solver=options))
+    assert "contact_solver" in str(error.value)
