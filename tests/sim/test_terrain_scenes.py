@@ -74,13 +74,25 @@ def test_the_scene_surfaces_are_the_terrains(name):
     assert all(m.geom_contype[g.id] == m.geom_conaffinity[g.id] == 1 for g in boxes)  # they touch the robot
 
 
-def test_the_obstacles_gaps_are_floor():
+def test_the_obstacles_boards_end_at_their_edges_and_leave_the_floor_between_them():
+    """1 mm outside each edge of each board (at the edge's middle) a ray meets the floor, 1 mm
+    inside the board; the floor runs between the two lanes and under the 20 cm walk's footsteps 0
+    and 4-6 (sole centres at x 0.186, 0.986, 1.186)."""
     terrain = TERRAINS["obstacles"]()
     m, d = compiled("obstacles")
-    for k in range(len(terrain.surfaces) - 1):
-        x = 0.15 + 0.30 + 0.15 + 0.6 * k  # the middle of the floor between boards k + 1 and k + 2
-        assert cast_down(m, d, x, 0.0)[::2] == (pytest.approx(0.0, abs=1e-12), "floor")
-        assert terrain.height_at(x, 0.0) == 0.0
+    for board in terrain.surfaces:
+        (a, b), (x, y, z) = board.half_extents, board.center
+        for dx, dy in [(a, 0.0), (-a, 0.0), (0.0, b), (0.0, -b)]:
+            ux, uy = np.sign(dx), np.sign(dy)
+            inside = cast_down(m, d, x + dx - 1e-3 * ux, y + dy - 1e-3 * uy)
+            outside = cast_down(m, d, x + dx + 1e-3 * ux, y + dy + 1e-3 * uy)
+            assert inside[::2] == (pytest.approx(z, abs=1e-9), board.name)
+            assert outside[::2] == (pytest.approx(0.0, abs=1e-12), "floor")
+    floor_points = [(x, 0.0) for x in np.linspace(0.2, 1.0, 9)] + [(0.586, -0.085), (0.186, 0.085), (0.986, 0.085),
+                                                                     (1.186, 0.085), (1.186, -0.085)]
+    for x, y in floor_points:
+        assert cast_down(m, d, x, y)[::2] == (pytest.approx(0.0, abs=1e-12), "floor")
+        assert terrain.surface_under(x, y).name == "floor"
 
 
 def test_a_box_reaches_the_floor_under_its_surface():
@@ -103,7 +115,7 @@ def test_scenes_compose_in_order_on_one_floor():
     planes = [g for g in range(m.ngeom) if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE]
     assert [m.geom(g).name for g in planes] == ["floor"]
     assert m.body("block").id > 0 and m.geom("tool").id > 0  # the push scene's block and tool
-    assert check_rays(m, d, TERRAINS["obstacles"]()) == 100  # the terrain is untouched
+    assert check_rays(m, d, TERRAINS["obstacles"]()) == 75  # the terrain is untouched: 3 boards x 25 rays
     assert m.nlight == 1 and m.ncam == 1
 
 

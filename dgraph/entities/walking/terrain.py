@@ -17,8 +17,9 @@ first edge the robot meets. :data:`TERRAINS` names them as the scenes do:
   of mlp's "stairs 10 cm" scenario).
 - ``platforms``: :func:`tilted_platforms`, two flat pads at 0.16 m and four pads tilted by 15
   degrees (walking notes §1.5: ``plateforme_surfaces.stl``, mlp's ``talos_plateformes.py``).
-- ``obstacles``: :func:`obstacles`, boards of 1 and 2 cm across the path (the MPTC report's
-  uneven terrain, "obstacles with a maximum height of 2cm", seed 000 L299-304).
+- ``obstacles``: :func:`obstacles`, boards of 1 and 2 cm in the feet's lanes under the 20 cm
+  walk's footsteps (the MPTC report's uneven terrain, "obstacles with a maximum height of 2cm",
+  seed 000 L299-304; the layout is ours).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from dgraph.entities.walking.footsteps import (
+    SIDES,
     frozen_array,
     placement_from_plain,
     plain_mapping,
@@ -362,33 +364,64 @@ def tilted_platforms(start: float = FIRST_EDGE, height: float = _PADS_FLAT_HEIGH
     return Terrain(surfaces)
 
 
-OBSTACLE_HEIGHTS = (0.01, 0.02, 0.01, 0.02)
-"""The default obstacle heights (m): at most 2 cm, the MPTC report's largest (seed 000 L299-304)."""
+OBSTACLE_HEIGHTS = (0.01, 0.02, 0.01)
+"""The default obstacle heights (m): at most 2 cm, the MPTC report's largest (seed 000 L299-304);
+one per footstep of the 20 cm walk that stands on a board (see :func:`obstacles`)."""
 
 
-def obstacles(heights: Sequence[float] = OBSTACLE_HEIGHTS, start: float = FIRST_EDGE, depth: float = 0.30,
-              gap: float = 0.30, width: float = 0.60) -> Terrain:
-    """A flat floor with low boards across the path: board ``obstacle_k`` (k from 1) is
-    ``heights[k - 1]`` high (m), spans ``x`` in ``[start + (k - 1)(depth + gap), ... + depth]``
-    and ``y`` in ``[-width / 2, width / 2]``.
+def obstacles(heights: Sequence[float] = OBSTACLE_HEIGHTS, first_center_x: float = 0.386, spacing: float = 0.2,
+              depth: float = 0.25, width: float = 0.16, lane_half_distance: float = 0.085,
+              first_side: str = "right") -> Terrain:
+    """A flat floor with low boards in the feet's lanes: board ``obstacle_k`` (k from 1) is
+    ``heights[k - 1]`` high (m), ``depth`` along x by ``width`` across (m), centred on
+    ``x = first_center_x + (k - 1) spacing``, ``y = +-lane_half_distance`` (``+`` the left lane),
+    the lanes alternating from ``first_side``'s.
 
     The MPTC report places "obstacles with a maximum height of 2cm" along the walking path and
-    shows them only in a figure (seed 000 L299-304); the layout is ours: boards as deep as a
-    stairs tread, with floor as deep between them, so that 0.30 m steps put each foot wholly on a
-    board or on the floor, one foot higher than the other; 0.60 m wide, the soles (+-0.154 m)
-    with room to sway. ValueError naming a bad argument."""
+    shows them only in a figure (seed 000 L299-304); the layout is ours, made for the 20 cm
+    straight walk of :func:`straight_walk` from TALOS's standing soles (centres at x = -0.014 +
+    0.2 k, y = +-0.085, the left foot first): ``obstacle_k`` under footstep k, counting from 0 (the
+    right foot at 0.386 m, the left at 0.586, the right at 0.786), the first footstep (the left
+    foot at 0.186) and the last three (0.986, 1.186, 1.186) on the floor. Footsteps 0 and 4
+    cannot stand on a board: a foot's placements 0.2 m apart (footstep 0 and the standing left
+    sole, footstep 4 and the closing footstep 6) overlap by 1 cm along the 0.21 m sole, so a board
+    under one would be under the other's heel or toes; footstep 5 stays on the floor so that the
+    robot ends on the floor, as it starts. The 0.21 x 0.138 m sole lies 2 cm
+    inside its board's front and back edges and 1.1 cm inside its sides; the foot swinging past a
+    board in the other lane passes 2.1 cm beside it (its inner edge 0.016 m from the path's line,
+    the board's 0.005 m on the other side). Boards of consecutive footsteps overlap along x, not
+    across: in the double supports after footsteps 1 to 4 one foot stands 1 cm higher than the other.
+
+    ValueError naming a bad argument, and naming ``spacing`` if two boards would overlap
+    (:func:`_boards_overlap`)."""
     if isinstance(heights, (str, Mapping)) or not isinstance(heights, Sequence) or not heights:
         raise ValueError(f"heights must be a non-empty list of heights, got {heights!r}")
     heights = [_positive(h, f"obstacle {k} height") for k, h in enumerate(heights, start=1)]
-    start, depth, width = plain_number(start, "start"), _positive(depth, "depth"), _positive(width, "width")
-    gap = plain_number(gap, "gap")
-    if gap < 0.0:
-        raise ValueError(f"gap must be >= 0, got {gap}")
+    first_center_x, spacing = plain_number(first_center_x, "first_center_x"), _positive(spacing, "spacing")
+    depth, width = _positive(depth, "depth"), _positive(width, "width")
+    lane_half_distance = plain_number(lane_half_distance, "lane_half_distance")
+    if lane_half_distance < 0.0:
+        raise ValueError(f"lane_half_distance must be >= 0, got {lane_half_distance}")
+    if first_side not in SIDES:
+        raise ValueError(f"first_side must be 'left' or 'right', got {first_side!r}")
+    if _boards_overlap(len(heights), spacing, depth, width, lane_half_distance):
+        raise ValueError(f"spacing {spacing} m makes boards {depth} m deep and {width} m wide overlap "
+                         f"(lanes {2.0 * lane_half_distance} m apart)")
+    first_lane = lane_half_distance if first_side == "left" else -lane_half_distance
     boards = []
-    for k, height in enumerate(heights, start=1):
-        front = start + (k - 1) * (depth + gap)
-        boards.append(_box_top(f"obstacle_{k}", (front, front + depth), (-width / 2, width / 2), height))
+    for k, height in enumerate(heights):
+        center_x, center_y = first_center_x + k * spacing, first_lane * (-1) ** k
+        boards.append(_box_top(f"obstacle_{k + 1}", (center_x - depth / 2, center_x + depth / 2),
+                               (center_y - width / 2, center_y + width / 2), height))
     return Terrain(tuple(boards))
+
+
+def _boards_overlap(count: int, spacing: float, depth: float, width: float, lane_half_distance: float) -> bool:
+    """True if two of ``count`` boards of :func:`obstacles` overlap: consecutive ones (in the two
+    lanes) if ``spacing < depth`` and ``2 lane_half_distance < width``, the next but one (in one
+    lane) if ``2 spacing < depth``."""
+    consecutive = count > 1 and spacing < depth and 2.0 * lane_half_distance < width
+    return consecutive or (count > 2 and 2.0 * spacing < depth)
 
 
 TERRAINS: dict[str, Callable[[], Terrain]] = {"flat": flat, "stairs10": stairs, "platforms": tilted_platforms,

@@ -1,6 +1,6 @@
 """WalkingView on a terrain (issue 14, item 3): the terrain's boxes, logged once as the MuJoCo scene
-builds them, and the footprints and support polygons at the soles' heights and tilts on stairs and
-tilted platforms, read back from the .rrd."""
+builds them, and the footprints and support polygons at the soles' heights and tilts on stairs,
+tilted platforms and the obstacles' boards, read back from the .rrd."""
 
 from __future__ import annotations
 
@@ -166,6 +166,25 @@ def test_the_support_polygon_on_a_tilted_pad_is_the_tilted_sole(on_platforms):
     pad = terrain.surface("tilted_2")
     np.testing.assert_allclose((polygon - pad.center) @ pad.normal, 0.0, atol=FLOAT32)  # on the pad's plane
     assert np.ptp(polygon[:, 2]) > 0.05  # tilted by 15 degrees along the sole's 0.21 m
+
+
+def test_the_obstacles_are_drawn_as_their_boards_and_the_footprints_on_them(tmp_path):
+    """The 20 cm walk over the obstacles: three boxes, 0.25 x 0.16 m, 1, 2 and 1 cm high, in the
+    right, left and right lanes (y = -+0.085) under footsteps 1-3; the footprints at those heights."""
+    terrain = TERRAINS["obstacles"]()
+    plan = terrain_walk(terrain, LEFT0, RIGHT0, steps=6, length=0.2)
+    entities = record(tmp_path / "obstacles.rrd", terrain, plan, ticks=100)
+    (chunk,) = entities["/world/walking/terrain"]
+    assert chunk["Boxes3D:labels"] == [["obstacle_1", "obstacle_2", "obstacle_3"]]
+    np.testing.assert_allclose(chunk["Boxes3D:centers"][0], [[0.386, -0.085, 0.005], [0.586, 0.085, 0.01],
+                                                             [0.786, -0.085, 0.005]], atol=FLOAT32)
+    np.testing.assert_allclose(chunk["Boxes3D:half_sizes"][0], [[0.125, 0.08, 0.005], [0.125, 0.08, 0.01],
+                                                                [0.125, 0.08, 0.005]], atol=FLOAT32)
+    strips = {side: entities[f"/world/walking/footprints/{side}"][0]["LineStrips3D:strips"][0]
+              for side in ("left", "right")}  # the initial footprint, then the footsteps in order
+    heights = {side: [strip[0][2] for strip in strips[side]] for side in strips}
+    assert heights["left"] == pytest.approx([0.0, 0.0, 0.02, 0.0, 0.0], abs=FLOAT32)
+    assert heights["right"] == pytest.approx([0.0, 0.01, 0.01, 0.0], abs=FLOAT32)
 
 
 def test_without_a_terrain_nothing_is_drawn_and_a_new_terrain_replaces_the_drawn_one(tmp_path):

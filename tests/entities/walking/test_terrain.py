@@ -1,5 +1,6 @@
 """Terrain: surfaces, the terrain value type, and the builders' geometry against the walking notes §1.5
-(the stairs and tilted platforms meshes of hpp-environments) and the MPTC report's obstacles."""
+(the stairs and tilted platforms meshes of hpp-environments) and the MPTC report's obstacles (our
+layout under the 20 cm walk's footsteps)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ import math
 import numpy as np
 import pytest
 
+from dgraph.entities.walking.footsteps import terrain_walk, yaw_placement
+from dgraph.entities.walking.swing import SwingPath, swing_clearances
 from dgraph.entities.walking.terrain import (
     FLOOR,
     TERRAINS,
@@ -133,25 +136,99 @@ def test_the_platforms_keep_their_relative_geometry_when_moved_and_stay_above_th
         tilted_platforms(height=0.06)
 
 
-def test_the_obstacles_are_boards_of_at_most_2cm_across_the_path():
+STANDING_LEFT, STANDING_RIGHT = yaw_placement([-0.009, 0.085, 0.0]), yaw_placement([-0.009, -0.085, 0.0])
+"""TALOS's soles at half-sitting: their centres (0.5 cm behind the origins) at (-0.014, +-0.085)."""
+
+
+def test_the_obstacles_are_boards_of_at_most_2cm_in_the_feets_lanes():
     terrain = obstacles()
-    assert [s.name for s in terrain.surfaces] == ["obstacle_1", "obstacle_2", "obstacle_3", "obstacle_4"]
+    assert [s.name for s in terrain.surfaces] == ["obstacle_1", "obstacle_2", "obstacle_3"] and terrain.floor
+    assert [s.center[2] for s in terrain.surfaces] == pytest.approx([0.01, 0.02, 0.01], abs=1e-15)
     assert max(s.center[2] for s in terrain.surfaces) == pytest.approx(0.02)  # the MPTC report's maximum
-    assert [s.center[2] for s in terrain.surfaces] == pytest.approx([0.01, 0.02, 0.01, 0.02])
-    for k, board in enumerate(terrain.surfaces):
-        x, y, _ = ranges(board)
-        assert x == pytest.approx([0.15 + 0.6 * k, 0.45 + 0.6 * k], abs=1e-12) and y == pytest.approx([-0.3, 0.3])
-    # 0.30 m steps from the start: the first foot on the boards, the other on the floor between them
-    assert [terrain.height_at(0.3 * k - 0.014, 0.085 * (-1) ** k) for k in range(1, 8)] == pytest.approx(
-        [0.01, 0.0, 0.02, 0.0, 0.01, 0.0, 0.02])
-    custom = obstacles(heights=[0.005], start=1.0, depth=0.1, gap=0.0, width=0.2)
-    assert ranges(custom.surfaces[0])[0] == pytest.approx([1.0, 1.1])
+    for k, (board, lane) in enumerate(zip(terrain.surfaces, (-0.085, 0.085, -0.085), strict=True)):
+        x, y, _ = ranges(board)  # 0.25 m deep, 0.16 m wide, centred on the 20 cm walk's footstep k + 1
+        assert x == pytest.approx([0.261 + 0.2 * k, 0.511 + 0.2 * k], abs=1e-12)
+        assert y == pytest.approx([lane - 0.08, lane + 0.08], abs=1e-12) and board.normal == pytest.approx([0, 0, 1])
+    # the lanes are 1 cm apart across the path's line; the robot's standing toes (x 0.091) well before
+    assert terrain.surface_under(0.5, 0.0051).name == "obstacle_2" and terrain.surface_under(0.5, 0.0).name == "floor"
+    assert terrain.surface_under(0.5, -0.0051).name == "obstacle_1"
+    assert {terrain.surface_under(x, y).name for x in (0.0, 0.26) for y in (-0.165, 0.165)} == {"floor"}
+
+
+def test_the_obstacles_arguments():
+    custom = obstacles(heights=[0.005, 0.015], first_center_x=1.0, spacing=0.3, depth=0.2, width=0.1,
+                       lane_half_distance=0.1, first_side="left")
+    assert [ranges(s)[:2] for s in custom.surfaces] == [
+        (pytest.approx([0.9, 1.1]), pytest.approx([0.05, 0.15])),
+        (pytest.approx([1.2, 1.4]), pytest.approx([-0.15, -0.05]))]
+    across = obstacles(heights=[0.01, 0.02], lane_half_distance=0.0, spacing=0.3, depth=0.3, width=0.6)  # old style
+    assert [ranges(s)[1] for s in across.surfaces] == [pytest.approx([-0.3, 0.3])] * 2
+    assert obstacles(heights=[0.01, 0.02], spacing=0.1).surfaces  # in two lanes apart, boards may overlap along x
     for kwargs, message in [({"heights": []}, "heights must be a non-empty list"),
                             ({"heights": [0.01, -0.02]}, "obstacle 2 height must be a finite number > 0"),
-                            ({"heights": [True]}, "obstacle 1 height must"), ({"gap": -0.1}, "gap must be >= 0"),
-                            ({"depth": 0.0}, "depth must")]:
+                            ({"heights": [True]}, "obstacle 1 height must"), ({"spacing": 0.0}, "spacing must"),
+                            ({"depth": 0.0}, "depth must"), ({"width": -0.1}, "width must"),
+                            ({"lane_half_distance": -0.01}, "lane_half_distance must be >= 0"),
+                            ({"first_side": "middle"}, "first_side must be 'left' or 'right'"),
+                            ({"spacing": 0.12}, "spacing 0.12 m makes boards 0.25 m deep"),  # one lane: 0.24 < 0.25
+                            ({"width": 0.18, "spacing": 0.2}, r"and 0.18 m wide overlap \(lanes 0.17 m apart\)")]:
         with pytest.raises(ValueError, match=message):
             obstacles(**kwargs)
+    with pytest.raises(TypeError, match="first_center_x must be a number"):
+        obstacles(first_center_x="0.4")
+
+
+def test_the_20cm_walk_steps_on_each_obstacle_and_off_it():
+    terrain = obstacles()
+    plan = terrain_walk(terrain, STANDING_LEFT, STANDING_RIGHT, steps=6, length=0.2)  # no sole straddles an edge
+    centres = [plan.sole.center(step.placement) for step in plan.steps]
+    assert [step.side for step in plan.steps] == ["left", "right"] * 3 + ["left"]
+    assert [c[0] for c in centres] == pytest.approx([0.186, 0.386, 0.586, 0.786, 0.986, 1.186, 1.186], abs=1e-12)
+    assert [c[2] for c in centres] == pytest.approx([0.0, 0.01, 0.02, 0.01, 0.0, 0.0, 0.0], abs=1e-15)
+    assert [terrain.surface_under(c[0], c[1]).name for c in centres] == [
+        "floor", "obstacle_1", "obstacle_2", "obstacle_3", "floor", "floor", "floor"]
+    # the margins of a sole on its board: 2 cm along x, 1.1 cm across
+    for step, board in zip(plan.steps[1:4], terrain.surfaces, strict=True):
+        x, y, _ = ranges(board)
+        corners = plan.sole.corners(step.placement)
+        assert corners[:, 0].min() - x[0] == pytest.approx(0.02) and x[1] - corners[:, 0].max() == pytest.approx(0.02)
+        assert corners[:, 1].min() - y[0] == pytest.approx(0.011) and y[1] - corners[:, 1].max() == pytest.approx(0.011)
+    # a fourth board in the left lane under footstep 4 would be under the closing footstep's heel
+    with pytest.raises(ValueError, match=r"step 6: .* corner \(1.0810, 0.1540\) is over 'obstacle_4'"):
+        terrain_walk(obstacles(heights=(0.01, 0.02, 0.01, 0.02)), STANDING_LEFT, STANDING_RIGHT, steps=6, length=0.2)
+
+
+def lateral_gap(corners: np.ndarray, board: Surface) -> float:
+    """How far (m) across the path a horizontal sole's ``corners`` are from a horizontal board's
+    rectangle where they overlap it along x; inf where they do not."""
+    x, y, _ = ranges(board)
+    if corners[:, 0].max() < x[0] or corners[:, 0].min() > x[1]:
+        return math.inf
+    return max(y[0] - corners[:, 1].max(), corners[:, 1].min() - y[1])
+
+
+def test_a_swinging_foot_passes_the_boards_of_the_other_lane_2cm_beside_them():
+    """Every swing of the 20 cm walk (:class:`SwingPath`, the flat walk's 5 cm apex), sampled every
+    1 % of the swing: beside each board that is not its lift-off's or touch-down's, the sole keeps
+    at least 1.5 cm across the path from it (2.1 cm: 0.085 - 0.069 + 0.085 - 0.08), and over the
+    boards it steps onto or off its corners clear their edges."""
+    terrain = obstacles()
+    plan = terrain_walk(terrain, STANDING_LEFT, STANDING_RIGHT, steps=6, length=0.2)
+    least_gaps = []  # per swing, across the path from the boards it passes
+    for phase in (p for p in plan.phases if p.kind == "single"):
+        path = SwingPath(phase.swing_from, phase.swing_to, phase.duration, 0.05)
+        contacts = {terrain.surface_under(*plan.sole.center(p)[:2]).name for p in (phase.swing_from, phase.swing_to)}
+        gaps = []
+        for x in np.linspace(0.0, 1.0, 101):
+            sample = path.at(x)
+            corners = sample.position + plan.sole.local_corners() @ sample.rotation.T
+            gaps += [lateral_gap(corners, board) for board in terrain.surfaces if board.name not in contacts]
+        least_gaps.append(min(gaps))
+    assert all(gap >= 0.015 for gap in least_gaps)  # every swing passes a board of the other lane (a finite gap)
+    assert least_gaps == pytest.approx([0.021] * 7, abs=1e-12)
+    clearances = swing_clearances(plan, terrain, 0.05)
+    assert [math.isinf(c) for c in clearances] == [True, False, False, False, False, False, True]
+    assert min(clearances) > 0.01  # the corners cross the boards' edges more than 1 cm above them
 
 
 def test_flat_and_the_named_terrains():
