@@ -254,8 +254,8 @@ def platforms(scene: Scene) -> None:
 
 
 def obstacles(scene: Scene) -> None:
-    """The terrain ``obstacles`` (:func:`dgraph.entities.walking.terrain.obstacles`): boards of 1
-    and 2 cm across the path, 0.30 m deep, 0.30 m apart, the first 0.15 m ahead of the robot (the
+    """The terrain ``obstacles`` (:func:`dgraph.entities.walking.terrain.obstacles`): boards of 1,
+    2 and 1 cm in the feet's lanes, under the second to fourth footsteps of the 20 cm walk (the
     MPTC report's uneven terrain, obstacles up to 2 cm)."""
     scene.terrain(TERRAINS["obstacles"]())
 
