@@ -1,38 +1,50 @@
 """TALOS's walks in MuJoCo against the thesis (Ch. 4.4.4, Tables 4.4-4.10) and placo's walk pattern generator.
 
-    .venv/bin/python bench/walking.py [--graphs talos_walk_20cm ...] [--out out/walking] [--doc docs/walking.md]
-        [--no-placo]
+    .venv/bin/python bench/walking.py [--graphs talos_walk_20cm ... | --terrain] [--out out/walking]
+        [--doc docs/walking.md] [--no-placo]
 
-Runs each walking graph (a name in graphs/ or a .yaml path; default: the 20 cm and 60 cm walks in
-torque, the 20 cm walk in the IK and TSID-position schemes) to its end or to the robot's fall, with
-the graph's own recorders and views taken out and one Recorder of what the evaluation reads, the
-control graph timed per tick as bench/compare_schemes.py does (``timed``). A graph file that does
-not exist is reported as such. Evaluated with :mod:`dgraph.evaluation` on the ticks before a fall,
-against the simulator's ground truth (the true CoM and soles from ``device.q``):
+Runs each walking graph (a name in graphs/ or a .yaml path; default: every graph of ``WALKS``: the
+flat 20 cm and 60 cm walks, the stairs, the tilted platforms in the three schemes and the 2 cm
+obstacles; ``--terrain``: only the last ones) to its end or to the robot's fall, with the graph's
+own recorders and views taken out and one Recorder of what the evaluation reads, the control
+graph timed per tick as bench/compare_schemes.py does (``timed``). A graph file that does not
+exist is reported as such. The robot has fallen when its base is less than ``FALL_HEIGHT`` above
+the terrain under it (``footsteps.walked_terrain``; on flat ground the device's ``fallen``).
+Evaluated with :mod:`dgraph.evaluation` on the ticks before a fall, against the simulator's ground
+truth (the true CoM and soles from ``device.q``):
 
-- ZMP error (Table 4.4, from ``ZMP_SETTLING``): the ankle F/T ZMP (``zmp.zmp``) against the planned one
-  (``pattern.zmp``), and, where the graph has a DCM stabiliser, against its desired ZMP ``p*``
-  (Eq. 2.30), the reference the thesis used for the position schemes (L4693-4699);
+- ZMP error (Tables 4.4, 4.6, 4.7, from ``ZMP_SETTLING``): the ankle F/T ZMP (``zmp.zmp``, on the
+  plane the pattern generator plans in, ``pattern.zmp_plane_height``) against the planned one
+  (``pattern.zmp``), horizontal axes, and, where the graph has a DCM stabiliser, against its
+  desired ZMP ``p*`` (Eq. 2.30), the reference the thesis used for the position schemes (L4693-4699);
 - CoM and feet tracking (Table 4.5): the true CoM against ``pattern.com_position``, the true
-  soles against ``left_swing.position`` / ``right_swing.position``;
-- E_m, E_m+, C_et, C_mt (Table 4.8, Eq. 4.16; D: the plan's distance from the initial to the final
-  midpoint of the soles, the thesis's "traveled distance", L4682), the PGM per gait stage
-  (Table 4.9, Eq. 4.17-4.18; stages from ``schedule.double_support`` / ``left_swing`` /
+  soles against ``left_swing.position`` / ``right_swing.position``; the CoM's height too;
+- E_m, E_m+, C_et, C_mt (Table 4.8, Eq. 4.16; D: the plan's horizontal distance from the initial
+  to the final midpoint of the soles, the thesis's "traveled distance", L4682), the PGM per gait
+  stage (Table 4.9, Eq. 4.17-4.18; stages from ``schedule.double_support`` / ``left_swing`` /
   ``right_swing``), the control tick (Table 4.10) with the calibration figure;
-- the final base position against the plan's final midpoint, the fall;
+- the final base position against the plan's final midpoint, the fall and the signs before it
+  (the QP's or the pattern generator's status, a slipping stance sole, a swinging foot off its
+  path, the measured ZMP at the support polygon's edge, the CoM off its plan);
+- the largest foot slip: per stance interval of a foot (``schedule.<side>_contact`` and not
+  ``<side>_swing``), the largest horizontal distance of its true sole from where it stood
+  ``SLIP_SETTLING`` into the interval;
 - the largest per-tick change of each foot's normal force (``solver.contact_wrenches``) within
   the scheduler's ``transition`` of a contact switch, against 5 % of the robot's weight.
 
 One figure per walk (docs/walking_<graph>.png): the top view of the CoM, planned and measured
-ZMP and DCM over the footprints and double-support polygons, and their x and y over time.
+ZMP and DCM over the footprints and double-support polygons (and the terrain's surfaces), their x
+and y over time, and on a terrain a side view (x-z): the surfaces, the terrain under each foot's
+line, the planned and true CoM, the true soles' and their references' paths.
 
 The peer (unless ``--no-placo``; bench/setup_placo.sh makes .venv-placo when it is missing):
-bench/peer_placo.py plans each walk's own footstep plan (``FootstepPlan.to_plain()``, the same
-CoM height, margin and initial CoM), and our ZmpPatternGenerator, with the walk graph's
+bench/peer_placo.py plans each flat walk's own footstep plan (``FootstepPlan.to_plain()``, the
+same CoM height, margin and initial CoM), and our ZmpPatternGenerator, with the walk graph's
 parameters and ``feedback = 0``, plans it open loop in the same run (placo's output is open loop
 too: each re-plan starts from its own trajectory). Compared: plan and re-plan times (with the
 calibration), the ZMP's distance to the plan's support polygon edge (min, share of samples
 outside), the CoM jerk (RMS, peak) and the DCM at the plan's end against the final support.
+placo's LIPM walks on one plane: the plans over a terrain are left out.
 
 Writes the recordings and the peer's files under ``--out`` and the whole of ``--doc``.
 """
@@ -69,6 +81,8 @@ from dgraph.entities.stabilizers.lipm import GRAVITY  # noqa: E402
 from dgraph.entities.walking import FootstepPlan, ZmpPatternGenerator  # noqa: E402
 from dgraph.entities.walking.footsteps import SIDES, convex_hull  # noqa: E402
 from dgraph.entities.walking.pattern_generator import SupportPolygons  # noqa: E402
+from dgraph.entities.walking.terrain import Terrain  # noqa: E402
+from dgraph.errors import DGraphError  # noqa: E402
 from dgraph.evaluation import (  # noqa: E402
     before_fall,
     contact_switch_force_jumps,
@@ -84,25 +98,50 @@ from dgraph.evaluation import (  # noqa: E402
 from dgraph_sim.truth import robot_mass, true_com_and_frames  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-WALKS = {  # graph -> (the thesis's scheme, walk)
+FLAT_WALKS = ("20 cm", "60 cm")
+WALKS = {  # graph -> (the thesis's scheme, walk), in the order of the document's tables
     "talos_walk_20cm": ("TSID torque", "20 cm"),
     "talos_walk_60cm": ("TSID torque", "60 cm"),
     "talos_walk_20cm_ik": ("IK", "20 cm"),
     "talos_walk_20cm_tsid_position": ("TSID position", "20 cm"),
+    "talos_stairs_ik": ("IK", "Stairs"),
+    "talos_stairs_tsid_position": ("TSID position", "Stairs"),
+    "talos_stairs": ("TSID torque", "Stairs"),
+    "talos_platforms_ik": ("IK", "Platforms"),
+    "talos_platforms_tsid_position": ("TSID position", "Platforms"),
+    "talos_platforms": ("TSID torque", "Platforms"),
+    "talos_obstacles": ("TSID torque", "Obstacles 2 cm"),
 }
+TERRAIN_GRAPHS = [name for name, (_, walk) in WALKS.items() if walk not in FLAT_WALKS]
+FLAT_REFERENCE = "talos_walk_20cm"  # the flat walk whose gains talos_obstacles must keep
 REQUIRED = ["device.q", "device.joint_torque", "device.v", "device.fallen", "zmp.zmp", "pattern.zmp",
             "pattern.com_position", "pattern.dcm", "left_swing.position", "right_swing.position",
-            "schedule.double_support", "schedule.left_swing", "schedule.right_swing"]
-OPTIONAL = ["solver.contact_wrenches", "stabilizer.desired_zmp"]
+            "schedule.double_support", "schedule.left_swing", "schedule.right_swing", "schedule.left_contact",
+            "schedule.right_contact"]
+OPTIONAL = ["solver.contact_wrenches", "stabilizer.desired_zmp", "solver.status", "pattern.status"]
 FORCE_JUMP_LIMIT = 0.05  # of the robot's weight per tick: the acceptance of issue 13
 ZMP_SETTLING = 0.05  # s left out of the ZMP errors: the F/T start-up transient of MuJoCo's initial contact state
+FALL_HEIGHT = 0.6  # m of the base above the terrain under it: TALOS's fall_height (sim/robots.py) above z = 0
+SLIP_SETTLING = 0.150  # s into a stance interval at which the sole's position becomes the slip's origin
+SLIP_LIMIT = 0.02  # m: the largest slip issue 14 accepts
+SWING_OFF_PATH = 0.03  # m of a swinging sole from its reference: a sign before a fall
+COM_OFF_PLAN = 0.05  # m of the true CoM from its plan, horizontally: a sign before a fall
 PLACO_PYTHON = ROOT / ".venv-placo" / "bin" / "python"
 
 # The thesis (Gazebo), /work/shared/reference/walking_mptc_actuators_drilling.md §1.7, keyed by (scheme, walk).
-THESIS_ZMP = {  # Table 4.4 [L4659-4668], m: (average, std, peak) per axis x, y; 20 cm walk only
+THESIS_ZMP = {  # m: (average, std, peak) per axis x, y
+    # Table 4.4 [L4659-4668], the 20 cm walk
     ("IK", "20 cm"): ((0.019, 0.022, 0.131), (0.022, 0.026, 0.150)),
     ("TSID position", "20 cm"): ((0.028, 0.025, 0.142), (0.025, 0.027, 0.138)),
     ("TSID torque", "20 cm"): ((0.026, 0.021, 0.078), (0.011, 0.014, 0.078)),
+    # Table 4.6 [L4826-4835], the tilted platforms
+    ("IK", "Platforms"): ((0.021, 0.024, 0.278), (0.016, 0.018, 0.118)),
+    ("TSID position", "Platforms"): ((0.012, 0.017, 0.197), (0.015, 0.019, 0.127)),
+    ("TSID torque", "Platforms"): ((0.013, 0.021, 0.107), (0.005, 0.006, 0.058)),
+    # Table 4.7 [L4857-4866], the stairs
+    ("IK", "Stairs"): ((0.022, 0.026, 0.257), (0.015, 0.017, 0.151)),
+    ("TSID position", "Stairs"): ((0.009, 0.013, 0.151), (0.012, 0.015, 0.119)),
+    ("TSID torque", "Stairs"): ((0.008, 0.006, 0.049), (0.006, 0.005, 0.047)),
 }
 THESIS_TRACKING = {  # Table 4.5 [L4743-4754], m: body -> (average, std, peak) per axis x, y; 60 cm, torque
     ("TSID torque", "60 cm"): {"CoM": ((0.018, 0.013, 0.050), (0.004, 0.003, 0.015)),
@@ -112,22 +151,35 @@ THESIS_TRACKING = {  # Table 4.5 [L4743-4754], m: body -> (average, std, peak) p
 THESIS_COT = {  # Table 4.8 [L4888-4910]: E_m J, E_m+ J, C_et, C_mt
     ("IK", "20 cm"): (1983.9, 1359.3, 1.68, 1.15), ("TSID position", "20 cm"): (2324.5, 764.1, 1.97, 0.65),
     ("TSID torque", "20 cm"): (521.8, 259.3, 0.44, 0.22), ("TSID torque", "60 cm"): (3147.2, 1583.8, 0.89, 0.45),
+    ("IK", "Platforms"): (5418.7, 3769.2, 3.7, 2.6), ("TSID position", "Platforms"): (5377.5, 1413.6, 3.6, 2.0),
+    ("TSID torque", "Platforms"): (1378.6, 668.5, 0.93, 0.45),
+    ("IK", "Stairs"): (7249.5, 2145.3, 4.1, 1.2), ("TSID position", "Stairs"): (6812.6, 2059.6, 3.8, 1.2),
+    ("TSID torque", "Stairs"): (1861.1, 1205.5, 1.1, 0.68),
 }
+THESIS_COT_ERRATUM = ("TSID position", "Platforms")  # its C_mt 2.0 does not follow from its E_m+ (walking notes §1.7)
 THESIS_PGM = {  # Table 4.9 [L4912-4930]: double support, single support, flying foot
     ("IK", "20 cm"): (0.35, 0.89, 0.24), ("TSID position", "20 cm"): (0.37, 0.74, 0.37),
     ("TSID torque", "20 cm"): (0.93, 0.87, 1.0), ("TSID torque", "60 cm"): (0.87, 0.79, 1.0),
+    ("IK", "Platforms"): (0.27, 0.85, 0.31), ("TSID position", "Platforms"): (0.27, 0.86, 0.30),
+    ("TSID torque", "Platforms"): (0.87, 0.8, 0.91),
+    ("IK", "Stairs"): (0.46, 0.86, 0.36), ("TSID position", "Stairs"): (0.55, 0.86, 0.34),
+    ("TSID torque", "Stairs"): (0.97, 0.89, 1.0),
 }
 THESIS_TICK = {  # Table 4.10 [L4932-4940], ms: average, peak
     ("IK", "20 cm"): (0.5, 2.0), ("TSID position", "20 cm"): (1.2, 4.5),
     ("TSID torque", "20 cm"): (1.0, 2.8), ("TSID torque", "60 cm"): (1.4, 6.0),
+    ("IK", "Platforms"): (0.7, 4.0), ("TSID position", "Platforms"): (1.2, 4.3),
+    ("TSID torque", "Platforms"): (1.2, 5.0),
+    ("IK", "Stairs"): (0.6, 4.0), ("TSID position", "Stairs"): (1.2, 4.2), ("TSID torque", "Stairs"): (1.1, 5.5),
 }
 
 
 @dataclass
 class Walk:
     """One walking graph and its run: the recording, the control ticks' durations (s, the first
-    tick left out), the wall time, and what the evaluation reads from the graph; ``problem`` says
-    why it did not run (the rest then stays empty)."""
+    tick left out), the wall time, whether the robot had fallen at each recorded tick (see
+    :func:`has_fallen`), and what the evaluation reads from the graph; ``problem`` says why it did
+    not run (the rest then stays empty)."""
 
     name: str
     path: Path
@@ -140,11 +192,21 @@ class Walk:
     transition: float = 0.0
     pattern_params: dict[str, object] = field(default_factory=dict)
     contacts: list[str] = field(default_factory=list)
+    terrain: Terrain | None = None
+    fallen: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     @property
     def thesis(self) -> tuple[str, str] | None:
         """The thesis's (scheme, walk) this graph stands for, if any."""
         return WALKS.get(self.name)
+
+    @property
+    def on_terrain(self) -> bool:
+        """Whether the walk is over a terrain (the thesis's platforms or stairs, or surfaces in its
+        ``footsteps.walked_terrain``) rather than on flat ground."""
+        if self.thesis is not None:
+            return self.thesis[1] not in FLAT_WALKS
+        return self.terrain is not None and bool(self.terrain.surfaces)
 
 
 # -- running ----------------------------------------------------------------------------------------
@@ -165,7 +227,11 @@ def prepared(walk: Walk, out: Path) -> dg.Graph | None:
         shown = walk.path.relative_to(ROOT) if walk.path.is_relative_to(ROOT) else walk.path
         walk.problem = f"not run: {shown} does not exist"
         return None
-    graph = dg.load(str(walk.path))
+    try:
+        graph = dg.load(str(walk.path))
+    except DGraphError as error:
+        walk.problem = f"not run: the graph does not load: {error}"
+        return None
     for name in [name for name, entity in graph.entities.items() if entity.observes]:
         graph.remove(name)
     missing = [name for name in REQUIRED if not has_signal(graph, name)]
@@ -177,6 +243,13 @@ def prepared(walk: Walk, out: Path) -> dg.Graph | None:
     return graph
 
 
+def has_fallen(terrain: Terrain, base: np.ndarray) -> bool:
+    """Whether the base at ``base`` (x, y, z) is less than ``FALL_HEIGHT`` above the terrain under
+    it: the device's ``fallen`` (base below 0.6 m) counted from the ground the robot is over, so
+    that a robot lying on a tread or on the landing has fallen too."""
+    return bool(base[2] - terrain.height_at(base[0], base[1]) < FALL_HEIGHT)
+
+
 def run(walk: Walk, out: Path) -> None:
     """Run the walk's graph to its duration or to the fall, filling ``walk``."""
     graph = prepared(walk, out)
@@ -185,15 +258,18 @@ def run(walk: Walk, out: Path) -> None:
     durations: list[float] = []
     timed(graph, durations)
     device, ticks = graph["device"], round(graph.duration / graph.dt)
+    walk.terrain = graph["footsteps"].walked_terrain(0)
+    fallen: list[bool] = []
     start = time.perf_counter()
     with graph, tqdm(total=ticks, unit="tick", desc=walk.name, mininterval=0.5) as bar:
         for tick in range(ticks):
-            fallen = device.fallen(tick)  # this tick's state, recorded by the step
+            # this tick's state, recorded by the step
+            fallen.append(bool(device.fallen(tick)) or has_fallen(walk.terrain, device.q(tick)[:3]))
             graph.step()
             bar.update()
-            if fallen:
+            if fallen[-1]:
                 break
-    walk.wall = time.perf_counter() - start
+    walk.wall, walk.fallen = time.perf_counter() - start, np.array(fallen)
     walk.data, walk.durations, walk.dt = graph["evaluation"].data(), np.array(durations[1:]), graph.dt
     walk.plan, walk.transition = graph["footsteps"].plan(0), graph["schedule"].transition
     walk.pattern_params = dict(graph["pattern"].given_params)
@@ -209,24 +285,33 @@ def ankle_columns(model: object, side: str) -> list[int]:
 def evaluate(walk: Walk) -> dict[str, object]:
     """Every metric of one walk, on the ticks before a fall."""
     data = walk.data
-    mask, fall = before_fall(data["device.fallen"]), first_fall(data["device.fallen"])
+    mask, fall = before_fall(walk.fallen), first_fall(walk.fallen)
     com, soles = true_com_and_frames(data["device.q"], [f"{side}_sole_link" for side in SIDES])
     result = {"fall": None if fall is None else fall * walk.dt, "mask": mask, "weight": robot_mass() * GRAVITY,
-              "com": com, "dcm": measured_dcm(walk, com)}
+              "com": com, "soles": soles, "dcm": measured_dcm(walk, com)}
     result.update(tracking(walk, com, soles, mask))
     result.update(gait(walk, mask))
+    result["slips"] = {side: largest_slip(drift) for side, drift in stance_drifts(walk, soles, mask).items()}
+    result["fall_signs"] = None if fall is None else fall_signs(walk, result, fall)
     return result
+
+
+def support_heights(walk: Walk) -> np.ndarray:
+    """The height of the support the pattern generator carries the CoM over at each recorded tick
+    (``FootstepPlan.support_height``: constant on flat ground, rising tread by tread on stairs)."""
+    return np.array([walk.plan.support_height(walk.plan.time(t))[0] for t in walk.data["time"]])
 
 
 def measured_dcm(walk: Walk, com: np.ndarray) -> np.ndarray:
     """The true DCM ``c + c_dot / omega`` (Eq. 2.27), ``c_dot`` by central differences of the true
-    CoM, ``omega`` from the planned CoM height above the ground."""
-    omega = natural_frequency(walk.data["pattern.com_position"][:, 2] - walk.plan.ground_height())
+    CoM, ``omega`` from the planned CoM height above the support (``support_heights``)."""
+    omega = natural_frequency(walk.data["pattern.com_position"][:, 2] - support_heights(walk))
     return divergent_component(com, np.gradient(com, walk.dt, axis=0), omega)
 
 
 def tracking(walk: Walk, com: np.ndarray, soles: np.ndarray, mask: np.ndarray) -> dict[str, object]:
-    """The ZMP errors (Table 4.4) and the CoM and feet tracking errors (Table 4.5), horizontal axes."""
+    """The ZMP errors (Tables 4.4, 4.6, 4.7) and the CoM and feet tracking errors (Table 4.5), horizontal
+    axes; the CoM's height against its plan."""
     data = walk.data
     settled = mask & (data["time"] >= ZMP_SETTLING)
     result = {"zmp": tracking_error(data["zmp.zmp"][:, :2], data["pattern.zmp"][:, :2], settled),
@@ -237,6 +322,7 @@ def tracking(walk: Walk, com: np.ndarray, soles: np.ndarray, mask: np.ndarray) -
     if "stabilizer.desired_zmp" in data:
         result["zmp_desired"] = tracking_error(data["zmp.zmp"][:, :2], data["stabilizer.desired_zmp"][:, :2],
                                                settled)
+    result["com_height"] = tracking_error(com[:, 2:], data["pattern.com_position"][:, 2:], mask)
     return result
 
 
@@ -248,8 +334,10 @@ def gait(walk: Walk, mask: np.ndarray) -> dict[str, object]:
     model = load_model("talos")
     work, positive = mechanical_energy(data["device.joint_torque"][mask], data["device.v"][mask, 6:], dt)
     distance = float(np.linalg.norm(plan.final_midpoint()[:2] - plan.phases[0].zmp_from[:2]))
+    com_height = walk.data["pattern.com_position"][mask, 2]
     return {
         "energy": (work, positive), "distance": distance,
+        "climb": robot_mass() * GRAVITY * float(com_height[-1] - com_height[0]),
         "cot": tuple(cost_of_transport(energy, robot_mass(), distance) for energy in (work, positive)),
         "pgm": phase_passivity(data["device.joint_torque"][mask], ankle_columns(model, "left"),
                                ankle_columns(model, "right"), data["schedule.double_support"][mask].astype(bool),
@@ -269,6 +357,74 @@ def force_jumps(walk: Walk, swings: dict[str, np.ndarray], mask: np.ndarray) -> 
     normal = walk.data["solver.contact_wrenches"][mask][:, :2, 2]
     in_contact = np.column_stack([~swings[side] for side in SIDES])
     return contact_switch_force_jumps(normal, in_contact, round(walk.transition / walk.dt))
+
+
+@dataclass(frozen=True)
+class Slip:
+    """A sole's largest slip (m, horizontal) and the tick it is reached."""
+
+    largest: float
+    tick: int
+
+
+def stance_intervals(stance: np.ndarray) -> list[tuple[int, int]]:
+    """The ``[start, end)`` tick ranges where ``stance`` is true."""
+    edges = np.diff(np.r_[0, np.asarray(stance, dtype=int), 0])
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist(), strict=True))
+
+
+def stance_drift(sole_xy: np.ndarray, stance: np.ndarray, settle: int) -> np.ndarray:
+    """Per tick, the horizontal distance (m) of a sole (``sole_xy``, ticks x 2) from where it stood
+    ``settle`` ticks into its current stance interval (0 before then and outside stance)."""
+    drift = np.zeros(len(stance))
+    for start, end in stance_intervals(stance):
+        anchor = start + settle
+        if anchor < end:
+            drift[anchor:end] = np.linalg.norm(sole_xy[anchor:end] - sole_xy[anchor], axis=1)
+    return drift
+
+
+def stance_drifts(walk: Walk, soles: np.ndarray, mask: np.ndarray) -> dict[str, np.ndarray]:
+    """Each foot's :func:`stance_drift` on the ticks before the fall, a stance being the ticks where
+    the foot is a contact of the controller and does not swing (``schedule.<side>_contact`` and not
+    ``<side>_swing``), anchored ``SLIP_SETTLING`` into it."""
+    settle = round(SLIP_SETTLING / walk.dt)
+    drifts = {}
+    for i, side in enumerate(SIDES):
+        stance = walk.data[f"schedule.{side}_contact"].astype(bool) & ~walk.data[f"schedule.{side}_swing"].astype(bool)
+        drifts[side] = stance_drift(soles[mask, i, :2], stance[mask], settle)
+    return drifts
+
+
+def largest_slip(drift: np.ndarray) -> Slip:
+    """The largest value of a :func:`stance_drift` and its tick."""
+    tick = int(np.argmax(drift))
+    return Slip(float(drift[tick]), tick)
+
+
+def fall_signs(walk: Walk, result: dict[str, object], fall: int) -> list[tuple[int, str]]:
+    """What went wrong before the fall, each sign at the first tick it shows, in time order (none of
+    them shows in the walks that do not fall): a status of the QP (``solver.status``) or of the
+    pattern generator's re-plan (``pattern.status``) other than 0, a stance sole slipping more
+    than ``SLIP_LIMIT``, a swinging sole more than ``SWING_OFF_PATH`` from its reference, the
+    measured ZMP on or past the edge of the planned support polygon (a sole rolling over its edge,
+    or the feet off their planned footprints), the true CoM more than ``COM_OFF_PLAN`` off its plan horizontally."""
+    data, before = walk.data, slice(fall)
+    conditions = [(f"`{name}` {int(data[name][before][np.argmax(data[name][before] != 0)])}",
+                   data[name][before] != 0) for name in ("solver.status", "pattern.status") if name in data]
+    drifts = stance_drifts(walk, result["soles"], result["mask"])
+    for i, side in enumerate(SIDES):
+        conditions.append((f"{side} sole slipping > {1e2 * SLIP_LIMIT:g} cm", drifts[side][before] > SLIP_LIMIT))
+        off_path = np.linalg.norm(result["soles"][before, i] - data[f"{side}_swing.position"][before], axis=1)
+        swinging = data[f"schedule.{side}_swing"][before].astype(bool)
+        conditions.append((f"{side} foot {1e2 * SWING_OFF_PATH:g} cm off its swing path",
+                           swinging & (off_path > SWING_OFF_PATH)))
+    polygons = SupportPolygons(walk.plan, 0.0).at(walk.plan.time(data["time"][before]))
+    conditions.append(("measured ZMP on or past the planned support polygon's edge",
+                       polygon_margin(data["zmp.zmp"][before, :2], *polygons) <= 0.0))
+    com_off = np.linalg.norm(result["com"][before, :2] - data["pattern.com_position"][before, :2], axis=1)
+    conditions.append((f"CoM {1e2 * COM_OFF_PLAN:g} cm off its plan", com_off > COM_OFF_PLAN))
+    return sorted((int(np.argmax(shown)), label) for label, shown in conditions if shown.any())
 
 
 # -- plots ------------------------------------------------------------------------------------------
@@ -293,8 +449,51 @@ def stretch_across(axes: plt.Axes) -> int:
     return max(1, round(0.25 * (x_high - x_low) / (y_high - y_low)))
 
 
+def draw_surfaces_from_above(axes: plt.Axes, terrain: Terrain) -> None:
+    """The terrain's surfaces (light grey rectangles, seen from above) within the axes' present limits."""
+    axes.autoscale_view()
+    axes.set_autoscale_on(False)
+    for surface in terrain.surfaces:
+        corners = surface.corners()
+        axes.fill(corners[:, 0], corners[:, 1], color="0.93", edgecolor="0.7", linewidth=0.6, zorder=-1)
+
+
+def side_line(plan: FootstepPlan, side: str) -> float:
+    """The median y of ``side``'s footprints in the plan: the line along which it walks."""
+    placements = [plan.initial_left if side == "left" else plan.initial_right]
+    placements += [step.placement for step in plan.steps if step.side == side]
+    return float(np.median([plan.sole.center(placement)[1] for placement in placements]))
+
+
+def draw_side_view(axes: plt.Axes, walk: Walk, result: dict[str, object]) -> None:
+    """The walk seen from its right (x-z): each surface as the box under it (grey), the terrain's
+    height along each foot's line (``side_line``), the planned and true CoM, the true soles' paths
+    and their references (``<side>_swing.position``)."""
+    mask, data = result["mask"], walk.data
+    for surface in walk.terrain.surfaces:
+        corners = surface.corners()[:, [0, 2]]
+        box = convex_hull(np.vstack([corners, np.column_stack([corners[:, 0], np.zeros(4)])]))
+        axes.fill(box[:, 0], box[:, 1], color="0.9", edgecolor="0.6", linewidth=0.6, zorder=0)
+    x = np.linspace(result["soles"][mask, :, 0].min() - 0.2, result["soles"][mask, :, 0].max() + 0.2, 1200)
+    colours, widths = {"left": "tab:blue", "right": "tab:red"}, {"left": 2.4, "right": 1.0}  # left under right
+    for i, side in enumerate(SIDES):
+        y = side_line(walk.plan, side)
+        axes.plot(x, [walk.terrain.height_at(xi, y) for xi in x], color=colours[side], linewidth=0.8, alpha=0.5,
+                  label=f"terrain along the {side} foot's line (y {y:+.3f} m)")
+        axes.plot(result["soles"][mask, i, 0], result["soles"][mask, i, 2], color=colours[side],
+                  linewidth=widths[side], alpha=0.8, label=f"{side} sole (true)")
+        reference = data[f"{side}_swing.position"][mask]
+        axes.plot(reference[:, 0], reference[:, 2], color=colours[side], linewidth=0.8, linestyle="--",
+                  label=f"{side} sole reference")
+    axes.plot(result["com"][mask, 0], result["com"][mask, 2], color="k", linewidth=1.4, label="CoM (true)")
+    planned = data["pattern.com_position"][mask]
+    axes.plot(planned[:, 0], planned[:, 2], color="k", linewidth=1.0, linestyle="--", label="CoM plan")
+    axes.set(aspect="equal", xlabel="x (m)", ylabel="z (m)", title="side view (seen from the right)")
+    axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
+
+
 def plot_walk(path: Path, walk: Walk, result: dict[str, object]) -> None:
-    """The walk's figure: the top view above, x and y over time below."""
+    """The walk's figure: the top view above, on a terrain the side view under it, x and y over time below."""
     mask, data = result["mask"], walk.data
     t = data["time"][mask]
     series = [("CoM (true)", result["com"][mask], dict(color="k", linewidth=1.4)),
@@ -303,14 +502,17 @@ def plot_walk(path: Path, walk: Walk, result: dict[str, object]) -> None:
               ("ZMP measured (ankle F/T)", data["zmp.zmp"][mask], dict(color="tab:olive", linewidth=0.6)),
               ("DCM plan", data["pattern.dcm"][mask], dict(color="tab:purple", linewidth=1.4)),
               ("DCM measured", result["dcm"][mask], dict(color="tab:orange", linewidth=0.8, linestyle=":"))]
-    figure = plt.figure(figsize=(14, 9), constrained_layout=True)
-    grid = figure.add_gridspec(2, 2, height_ratios=(1.0, 1.0))
-    top, along, across = figure.add_subplot(grid[0, :]), figure.add_subplot(grid[1, 0]), figure.add_subplot(grid[1, 1])
+    side_view = bool(walk.terrain.surfaces)
+    figure = plt.figure(figsize=(14, 14 if side_view else 9), constrained_layout=True)
+    grid = figure.add_gridspec(3 if side_view else 2, 2)
+    top = figure.add_subplot(grid[0, :])
+    along, across = figure.add_subplot(grid[-1, 0]), figure.add_subplot(grid[-1, 1])
     draw_plan(top, walk.plan)
     for label, xy, style in series:
         top.plot(xy[:, 0], xy[:, 1], label=label, **style)
         along.plot(t, xy[:, 0], **style)
         across.plot(t, xy[:, 1], **style)
+    draw_surfaces_from_above(top, walk.terrain)
     stretch = stretch_across(top)
     top.set(aspect=stretch, xlabel="x (m)", ylabel="y (m)", title=f"{walk.name}: top view" + (
         f", y stretched ×{stretch}" if stretch > 1 else "") + (
@@ -318,7 +520,11 @@ def plot_walk(path: Path, walk: Walk, result: dict[str, object]) -> None:
     top.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
     along.set(xlabel="time (s)", ylabel="x (m)", title="along the walk")
     across.set(xlabel="time (s)", ylabel="y (m)", title="across the walk")
-    for axes in (top, along, across):
+    panels = [top, along, across]
+    if side_view:
+        panels.append(figure.add_subplot(grid[1, :]))
+        draw_side_view(panels[-1], walk, result)
+    for axes in panels:
         axes.grid(alpha=0.3)
     figure.savefig(path, dpi=80)
     plt.close(figure)
@@ -381,10 +587,10 @@ def plan_quality(samples: dict[str, np.ndarray], plan: FootstepPlan) -> dict[str
 
 
 def compare_planners(walks: list[Walk], results: dict[str, dict], out: Path) -> list[dict[str, object]]:
-    """Ours and placo's plans of each distinct footstep plan of the walks that ran."""
+    """Ours and placo's plans of each distinct footstep plan of the flat walks that ran."""
     comparisons: dict[str, dict[str, object]] = {}
     for walk in walks:
-        if walk.plan is None:
+        if walk.plan is None or walk.on_terrain:
             continue
         key = json.dumps(walk.plan.to_plain())
         if key in comparisons:
@@ -422,6 +628,18 @@ def fell(result: dict[str, object]) -> str | None:
     return None if result["fall"] is None else f"fell at {result['fall']:.2f} s"
 
 
+def fell_with_signs(walk: Walk, result: dict[str, object]) -> str | None:
+    """``fell at X s`` and the first signs before the fall (:func:`fall_signs`) if the robot fell,
+    None otherwise."""
+    if result["fall"] is None:
+        return None
+    signs = result["fall_signs"]
+    if not signs:
+        return f"{fell(result)}; no sign the bench looks for came before it"
+    return f"{fell(result)}; first signs: " + ", then ".join(f"{label} at {tick * walk.dt:.2f} s"
+                                                            for tick, label in signs[:3])
+
+
 def labelled(walk: Walk, result: dict[str, object]) -> str:
     """The graph's name, with its fall if it fell (for the tables that still give numbers)."""
     return walk.name if result["fall"] is None else f"{walk.name} ({fell(result)}: until then)"
@@ -450,18 +668,23 @@ def summary_table(walks: list[Walk], results: dict[str, dict]) -> str:
                   "distance (mm)", "wall time (real-time factor)"], rows)
 
 
-def zmp_rows(walk: Walk, result: dict[str, object]) -> list[list[str]]:
+def zmp_rows(walk: Walk, result: dict[str, object], signs: bool = False) -> list[list[str]]:
     """The ZMP error rows of one walk: against the plan, and against p* where there is a stabiliser;
-    the thesis's numbers on the row of its reference (p* for the position schemes when we have it)."""
+    the thesis's numbers on the row of its reference (p* for the position schemes when we have it).
+    A walk that fell has one row, on the thesis's reference: its fall (with its first signs if
+    ``signs``) instead of the numbers."""
     references = [("planned ZMP (`pattern.zmp`)", "zmp")]
     if "zmp_desired" in result:
         references.append(("stabiliser's p* (Eq. 2.30)", "zmp_desired"))
     thesis = THESIS_ZMP.get(walk.thesis)
     position_scheme = walk.thesis is not None and walk.thesis[0] != "TSID torque"
     thesis_key = "zmp_desired" if position_scheme and "zmp_desired" in result else "zmp"
+    fall = fell_with_signs(walk, result) if signs else fell(result)
     rows = []
     for label, key in references:
-        ours = [fell(result)] * 2 if fell(result) else [triple(statistics(result[key], axis)) for axis in (0, 1)]
+        if fall and key != thesis_key:
+            continue
+        ours = [fall, "—"] if fall else [triple(statistics(result[key], axis)) for axis in (0, 1)]
         theirs = [triple(thesis[axis]) if thesis is not None and key == thesis_key else "—" for axis in (0, 1)]
         rows.append([walk.name, label, ours[0], theirs[0], ours[1], theirs[1]])
     return rows
@@ -483,18 +706,26 @@ def tracking_table(walks: list[Walk], results: dict[str, dict]) -> str:
     return table(["graph", "body", "x ours", "x thesis (Table 4.5)", "y ours", "y thesis (Table 4.5)"], rows)
 
 
-def energy_table(walks: list[Walk], results: dict[str, dict]) -> str:
+def energy_table(walks: list[Walk], results: dict[str, dict], climb: bool = False) -> str:
+    """E_m, E_m+, C_et, C_mt and D, ours and the thesis's; with ``climb``, also ``m g`` times the
+    planned CoM's rise and the thesis's D implied by its row, ``E_m / (C_et m g)``."""
     rows = []
     for walk in (w for w in walks if w.problem is None):
         result, thesis = results[walk.name], THESIS_COT.get(walk.thesis)
         if fell(result):
-            ours = [fell(result)] * 3
+            ours = [fell(result)] * 4
         else:
             ours = [f"{result['energy'][0]:.1f} / {result['energy'][1]:.1f}",
-                    f"{result['cot'][0]:.2f} / {result['cot'][1]:.2f}", f"{result['distance']:.3f}"]
-        theirs = ["—", "—"] if thesis is None else [f"{thesis[0]} / {thesis[1]}", f"{thesis[2]} / {thesis[3]}"]
-        rows.append([walk.name, ours[0], theirs[0], ours[1], theirs[1], ours[2]])
-    return table(["graph", "E_m / E_m⁺ (J) ours", "thesis", "C_et / C_mt ours", "thesis", "D (m)"], rows)
+                    f"{result['cot'][0]:.2f} / {result['cot'][1]:.2f}", f"{result['distance']:.3f}",
+                    f"{result['climb']:.1f}"]
+        theirs = ["—", "—", "—"] if thesis is None else [
+            f"{thesis[0]} / {thesis[1]}", f"{thesis[2]} / {thesis[3]}" + (" ⚠" if walk.thesis == THESIS_COT_ERRATUM
+                                                                          else ""),
+            f"{thesis[0] / (thesis[2] * robot_mass() * GRAVITY):.2f}"]
+        rows.append([walk.name, ours[0], theirs[0], ours[1], theirs[1], ours[2]] + ([ours[3], theirs[2]] if climb
+                                                                                     else []))
+    header = ["graph", "E_m / E_m⁺ (J) ours", "thesis", "C_et / C_mt ours", "thesis", "D (m)"]
+    return table(header + (["m g Δz_CoM plan (J)", "thesis D implied (m)"] if climb else []), rows)
 
 
 def pgm_table(walks: list[Walk], results: dict[str, dict]) -> str:
@@ -538,6 +769,119 @@ def force_table(walks: list[Walk], results: dict[str, dict]) -> str:
                   "below"], rows)
 
 
+def terrain_summary_table(walks: list[Walk], results: dict[str, dict]) -> str:
+    """Outcome of every terrain walk: the fall and its first signs, the final base against the
+    plan's final midpoint, the CoM height against its plan, wall time."""
+    rows = []
+    for walk in walks:
+        if walk.problem is not None:
+            rows.append([walk.name, thesis_label(walk), walk.problem, "—", "—", "—", "—"])
+            continue
+        result = results[walk.name]
+        base, midpoint = result["final_base"], result["final_midpoint"]
+        outcome = fell_with_signs(walk, result) or f"walked to the end ({len(result['mask']) * walk.dt:.1f} s)"
+        height = result["com_height"]
+        rows.append([walk.name, thesis_label(walk), outcome, f"{base[0]:.3f}, {base[1]:.3f}",
+                     f"{midpoint[0]:.3f}, {midpoint[1]:.3f}",
+                     f"{1e3 * height.mean[0]:.1f} / {1e3 * height.peak[0]:.1f}",
+                     f"{walk.wall:.0f} s ({result['real_time_factor']:.2f})"])
+    return table(["graph", "thesis", "outcome", "base x, y at the end or the fall (m)",
+                  "plan's final midpoint x, y (m)", "CoM height error average / peak (mm)",
+                  "wall time (real-time factor)"], rows)
+
+
+def terrain_zmp_table(walks: list[Walk], results: dict[str, dict]) -> str:
+    """The ZMP errors of the terrain walks beside the thesis's Tables 4.6 and 4.7, a graph that did
+    not run with its reason (and the thesis's row all the same)."""
+    rows = []
+    for walk in walks:
+        scheme = "—" if walk.thesis is None else walk.thesis[0]
+        terrain = "—" if walk.thesis is None else walk.thesis[1]
+        if walk.problem is not None:
+            thesis = THESIS_ZMP.get(walk.thesis)
+            theirs = ["—", "—"] if thesis is None else [triple(thesis[axis]) for axis in (0, 1)]
+            rows.append([terrain, scheme, walk.name, "—", walk.problem, theirs[0], "—", theirs[1]])
+            continue
+        rows += [[terrain, scheme, *row] for row in zmp_rows(walk, results[walk.name], signs=True)]
+    return table(["walk", "scheme", "graph", "measured ZMP against", "x ours", "x thesis", "y ours", "y thesis"],
+                 rows)
+
+
+def slip_table(walks: list[Walk], results: dict[str, dict]) -> str:
+    """Each foot's largest slip (:func:`largest_slip`) and whether both are under ``SLIP_LIMIT``."""
+    rows = []
+    for walk in (w for w in walks if w.problem is None):
+        result = results[walk.name]
+        slips = [result["slips"][side] for side in SIDES]
+        cells = [f"{1e3 * slip.largest:.1f} at {slip.tick * walk.dt:.2f} s" for slip in slips]
+        below = all(slip.largest < SLIP_LIMIT for slip in slips)
+        rows.append([labelled(walk, result), *cells, "yes" if below else "no"])
+    return table(["graph", "left sole: largest slip (mm), at", "right sole", f"below {1e3 * SLIP_LIMIT:g} mm"],
+                 rows)
+
+
+def zmp_peaks_check(walk: Walk, result: dict[str, object]) -> tuple[str, bool] | None:
+    """Whether the ZMP error's peaks (against the plan) are at most the thesis's, per axis (None
+    without thesis numbers)."""
+    thesis = THESIS_ZMP.get(walk.thesis)
+    if thesis is None:
+        return None
+    if result["fall"] is not None:
+        return "ZMP peaks ≤ the thesis's: not measured (it fell)", False
+    ours = result["zmp"].peak
+    ok = bool(ours[0] <= thesis[0][2] and ours[1] <= thesis[1][2])
+    return (f"ZMP peaks ≤ the thesis's: x {1e3 * ours[0]:.1f} mm ≤ {1e3 * thesis[0][2]:.0f}, y {1e3 * ours[1]:.1f} mm "
+            f"≤ {1e3 * thesis[1][2]:.0f}: {'holds' if ok else 'does not hold'}"), ok
+
+
+def torque_checks(walk: Walk, result: dict[str, object], obstacle_changes: list[str] | None) -> list[tuple[str, bool]]:
+    """The acceptance checks of one TSID-torque terrain walk: no fall, slip, ZMP peaks, and for the
+    obstacles the flat walk's gains (``obstacle_changes``: its parameters that differ from
+    ``FLAT_REFERENCE``'s)."""
+    largest = max(result["slips"][side].largest for side in SIDES)
+    checks = [(f"no fall: {'holds' if result['fall'] is None else 'does not hold, ' + fell(result)}",
+               result["fall"] is None),
+              (f"slip < {1e2 * SLIP_LIMIT:g} cm: largest {1e3 * largest:.1f} mm"
+               f"{'' if result['fall'] is None else ' before the fall'}: "
+               f"{'holds' if largest < SLIP_LIMIT else 'does not hold'}", largest < SLIP_LIMIT)]
+    peaks = zmp_peaks_check(walk, result)
+    if peaks is not None:
+        checks.append(peaks)
+    if walk.thesis is not None and walk.thesis[1] == "Obstacles 2 cm":
+        if obstacle_changes is None:
+            checks.append((f"the flat walk's gains: not checked (graphs/talos_obstacles.yaml or "
+                           f"graphs/{FLAT_REFERENCE}.yaml missing or not loading)", False))
+        else:
+            gains_kept = all(name.startswith("footsteps.") or name == "device.scene" for name in obstacle_changes)
+            checks.append((f"the flat walk's gains: its parameters differ from {FLAT_REFERENCE}'s only in "
+                           f"{', '.join(f'`{name}`' for name in obstacle_changes) or 'nothing'}: "
+                           f"{'holds' if gains_kept else 'does not hold'}", gains_kept))
+    return checks
+
+
+def acceptance(walks: list[Walk], results: dict[str, dict], obstacle_changes: list[str] | None) -> str:
+    """Which of issue 14's acceptance points hold, per TSID-torque terrain walk, and the position
+    schemes' outcomes (not part of the acceptance)."""
+    lines, failed = [], []
+    for walk in (w for w in walks if w.on_terrain):
+        if walk.problem is not None:
+            lines.append(f"- `{walk.name}`: {walk.problem}: no verdict.")
+            failed.append(walk.name)
+            continue
+        result = results[walk.name]
+        if walk.thesis is not None and walk.thesis[0] != "TSID torque":
+            lines.append(f"- `{walk.name}` ({walk.thesis[0]}, not part of the acceptance): "
+                         f"{fell(result) or 'walked to the end'}.")
+            continue
+        checks = torque_checks(walk, result, obstacle_changes)
+        lines.append(f"- `{walk.name}`: " + "; ".join(label for label, _ in checks) + ".")
+        if not all(ok for _, ok in checks):
+            failed.append(walk.name)
+    verdict = ("Every acceptance point holds." if not failed else
+               f"Not every acceptance point holds: see {', '.join(f'`{name}`' for name in failed)}.")
+    return "\n".join(lines) + f"\n\n{verdict}\n"
+
+
 def planner_table(comparison: dict[str, object], cal: dict[str, object]) -> str:
     """Ours against placo on one plan."""
     ours, placo, quality = comparison["ours"], comparison["placo"], comparison["quality"]
@@ -575,6 +919,11 @@ DIFFERENCES = """\
 - **ZMP reference**: for the torque scheme the thesis compared the estimated ZMP to the planned one,
   for the position schemes to the stabiliser's ZMP reference p* of Eq. 2.30 (L4693-4699); both are
   given above where the graph has them.
+- **Stairs and platforms plans**: the thesis's came offline from multicontact-locomotion-planning (SL1M
+  contacts, a centroidal optimisation that does not assume L̇ = 0; L1582-1627); ours are `terrain_walk`'s
+  straight plans over the same surfaces, step-to, single / double support 1.6 / 0.3 s (mlp's public
+  stairs and platforms configs, walking notes §1.3), planned online by the LIPM MPC with the CoM carried
+  over the supports' height. The thesis gives neither its gait nor its distance for these walks.
 - **Timing**: the thesis's control loop is C++ (the SoT and TSID); ours is Python calling Pinocchio
   and ProxQP, timed on the machine above with other processes running (see the load).
 - **Actuation**: the torque walks send the QP's torques to MuJoCo's motors; the position walks close
@@ -587,9 +936,11 @@ DIFFERENCES = """\
 
 
 def document(command: str, walks: list[Walk], results: dict[str, dict], comparisons: list[dict[str, object]],
-             calibrations: tuple[dict[str, object], dict[str, object]], load: float, images: list[str]) -> str:
-    """The whole of docs/walking.md."""
+             calibrations: tuple[dict[str, object], dict[str, object]], load: float, images: list[str],
+             obstacle_changes: list[str] | None) -> str:
+    """The whole of docs/walking.md: the flat walks' sections, then the terrain's, if either ran."""
     before, after = calibrations
+    flat, terrain = [w for w in walks if not w.on_terrain], [w for w in walks if w.on_terrain]
     parts = [
         "# Walking: TALOS in MuJoCo against the thesis and placo\n",
         f"Written by `{command}` on {time.strftime('%Y-%m-%d %H:%M')}; every number below comes from that run "
@@ -599,11 +950,38 @@ def document(command: str, walks: list[Walk], results: dict[str, dict], comparis
         f"other processes kept {load:.2f} CPUs busy on average during the run.\n",
         f"- before: {calibration_line(before)}\n- after: {calibration_line(after)}\n",
         "A time in calibration loops is the time divided by the first figure (bench/calibration.py).\n",
-        "## The walks\n",
-        "Each graph runs to its duration, or stops at the tick the robot falls (`device.fallen`: the base below "
-        "0.6 m); every gait metric is taken on the ticks before the fall, and a walk that fell shows its fall "
-        "instead. The base's position is `device.q` (the simulator's), the plan's final midpoint "
+        "Each graph runs to its duration, or stops at the tick the robot falls: its base (`device.q`, the "
+        f"simulator's) less than {FALL_HEIGHT:g} m above the terrain under it (`footsteps.walked_terrain`; on flat "
+        "ground the device's `fallen`, so that a robot lying on a tread has fallen too); every gait metric is taken "
+        "on the ticks before the fall, and a walk that fell shows its fall instead. The plan's final midpoint is "
         "`FootstepPlan.final_midpoint()`.\n",
+    ]
+    if flat:
+        parts += flat_sections(flat, results, before)
+    if terrain:
+        parts += terrain_sections(walks, results, before, obstacle_changes)
+    parts += [
+        "\n## Plots\n",
+        "Top view: the terrain's surfaces (light grey), footprints (left blue, right red), double-support polygons "
+        "(grey), the true CoM, the planned CoM, ZMP and DCM, the measured ZMP (ankle F/T) and DCM (true CoM + its "
+        "velocity / ω, ω from the planned CoM height above the support, `FootstepPlan.support_height`). On a "
+        "terrain, the side view: each surface as the box under it, the terrain's height along each foot's line "
+        "(the median y of its footprints), the true soles' paths and their references, the planned and true CoM. "
+        "Below: x and y over time.\n",
+        "\n".join(f"![{image}]({image})" for image in images),
+        "\n## The peer: placo's walk pattern generator\n",
+        peer_text(comparisons, before),
+        "\n## What differs from the thesis\n",
+        DIFFERENCES,
+        pattern_settings(walks),
+    ]
+    return "\n".join(parts)
+
+
+def flat_sections(walks: list[Walk], results: dict[str, dict], cal: dict[str, object]) -> list[str]:
+    """The flat walks' sections: outcome, Tables 4.4, 4.5, 4.8-4.10, force jumps."""
+    return [
+        "## The walks on flat ground\n",
         summary_table(walks, results),
         "\n## ZMP error (Table 4.4, 20 cm walk [L4659-4668])\n",
         "Average / std / peak of |p - p_ref| in mm, per axis, p the ZMP of the ankle F/T sensors (`zmp.zmp`, "
@@ -620,8 +998,8 @@ def document(command: str, walks: list[Walk], results: dict[str, dict], comparis
         "\n## Cost of transport (Table 4.8 [L4888-4910], Eq. 4.16)\n",
         f"m = {robot_mass():.2f} kg (the model's). "
         "E_m = ∫ Σ|τ_i ω_i| dt, E_m⁺ its positive part (applied torques `device.joint_torque`, joint velocities "
-        "`device.v`), C = E / (m g D) with m the model's mass and D the distance the plan travels, from the "
-        "midpoint of the initial soles to the final one (the thesis's \"traveled distance of 1.2 m\" [L4682]).\n",
+        "`device.v`), C = E / (m g D) with m the model's mass and D the horizontal distance the plan travels, from "
+        "the midpoint of the initial soles to the final one (the thesis's \"traveled distance of 1.2 m\" [L4682]).\n",
         energy_table(walks, results),
         "\n## Passivity gait measure per gait stage (Table 4.9 [L4912-4930], Eq. 4.17-4.18)\n",
         "PGM = 1 - RMS(τ_ankle) / RMS(τ_all joints) with the ankle pitch and roll joints (leg_*_5, leg_*_6): both "
@@ -631,24 +1009,68 @@ def document(command: str, walks: list[Walk], results: dict[str, dict], comparis
         "\n## Control tick (Table 4.10 [L4932-4940])\n",
         "The control graph's evaluation per tick (`timed` of bench/compare_schemes.py: every plugged input of the "
         "device pulled; the simulator's step and the recorder excluded), first tick left out.\n",
-        tick_table(walks, results, before),
+        tick_table(walks, results, cal),
         "\n## Normal-force jumps at the contact switches\n",
         "The largest |f_z[k] - f_z[k-1]| of each foot's contact force from the QP (`solver.contact_wrenches`) on "
         "the ticks within the scheduler's `transition` of a lift-off or touch-down of either foot; the acceptance "
         "of issue 13 is below 5 % of the robot's weight per tick.\n",
         force_table(walks, results),
-        "\n## Plots\n",
-        "Top view: footprints (left blue, right red), double-support polygons (grey), the true CoM, the planned "
-        "CoM, ZMP and DCM, the measured ZMP (ankle F/T) and DCM (true CoM + its velocity / ω); right: the same "
-        "along and across the walk.\n",
-        "\n".join(f"![{image}]({image})" for image in images),
-        "\n## The peer: placo's walk pattern generator\n",
-        peer_text(comparisons, before),
-        "\n## What differs from the thesis\n",
-        DIFFERENCES,
-        pattern_settings(walks),
     ]
-    return "\n".join(parts)
+
+
+def terrain_sections(walks: list[Walk], results: dict[str, dict], cal: dict[str, object],
+                     obstacle_changes: list[str] | None) -> list[str]:
+    """The section "Stairs, tilted platforms, obstacles": outcome, Tables 4.6-4.10 side by side
+    with ours, slips, force jumps, the acceptance of issue 14."""
+    terrain = [w for w in walks if w.on_terrain]
+    erratum = THESIS_COT[THESIS_COT_ERRATUM]
+    return [
+        "\n## Stairs, tilted platforms, obstacles\n",
+        "The walks of issue 14 over the terrains of `dgraph.entities.walking.terrain` (the MuJoCo scenes are built "
+        "from the same surfaces): `stairs10`, six 10 cm rises over 30 cm treads [L4837-4838], climbed step-to "
+        "(both feet on each tread); `platforms`, two flat pads 0.16 m high and four pads tilted by 15° (walking "
+        "notes §1.5), crossed step-to; `obstacles`, boards 1 and 2 cm high under the footsteps of the flat 20 cm "
+        "walk (the MPTC report's uneven terrain; the thesis has no numbers for it). The thesis planned its stairs "
+        "and platforms with multicontact-locomotion-planning offline [L1582-1627]; ours are `terrain_walk`'s plans "
+        "and our LIPM MPC with the CoM carried over the support's height. A graph that is not there yet, or does "
+        "not load, is listed as such.\n",
+        terrain_summary_table(terrain, results),
+        "\n### ZMP error (Table 4.6, tilted platforms [L4826-4835]; Table 4.7, stairs [L4857-4866])\n",
+        "Average / std / peak of |p - p_ref| in mm per horizontal axis, as for Table 4.4: p the ankle F/T "
+        "ZMP (`zmp.zmp`) on the plane the pattern generator plans the ZMP in (`zmp.plane_height` plugged from "
+        "`pattern.zmp_plane_height`: the stance sole's height, linear between the soles' in a double support), "
+        "p_ref the planned ZMP (`pattern.zmp`), or the stabiliser's p* for the position schemes, the thesis's "
+        "reference for them [L4693-4699]. The thesis's row sits beside the reference it used.\n",
+        terrain_zmp_table(terrain, results),
+        "\n### Foot slip\n",
+        "Per foot, the largest horizontal distance of the true sole (`<side>_sole_link` from `device.q`) from "
+        f"where it stood {1e3 * SLIP_SETTLING:g} ms after the start of its stance interval (the foot a contact "
+        "of the controller, `schedule.<side>_contact`, and not swinging), over every stance interval before the "
+        f"end or the fall; issue 14 accepts less than {1e2 * SLIP_LIMIT:g} cm. A sole that rolls over its edge "
+        "moves its frame too, and counts. The flat walks are given for comparison.\n",
+        slip_table(walks, results),
+        "\n### Cost of transport (Table 4.8 [L4888-4910], Eq. 4.16)\n",
+        f"C = E / (m g D), m = {robot_mass():.2f} kg (the model's), D the plan's horizontal distance from the "
+        "initial to the final midpoint of the soles. E_m and E_m⁺ are the joints' mechanical work "
+        "(`dgraph.evaluation.mechanical_energy`: ∫ Σ|τ_i ω_i| dt and ∫ Σ max(τ_i ω_i, 0) dt), so the work the "
+        "joints do to lift the robot is counted in them like any other work; no potential-energy term is added "
+        "or removed. The column m g Δz gives that potential energy (m g times the planned CoM's rise from the "
+        "first tick to the last) for comparison. The thesis does not "
+        "give its D for these walks; its E_m / (C_et m g) is given with our m. ⚠: the thesis's TSID-position "
+        f"platforms row gives C_mt {erratum[3]}, but its E_m⁺ {erratum[1]} J with the same m g D as its C_et "
+        f"gives {erratum[1] * erratum[2] / erratum[0]:.2f} (walking notes §1.7).\n",
+        energy_table(terrain, results, climb=True),
+        "\n### Passivity gait measure (Table 4.9 [L4912-4930])\n",
+        "PGM = 1 - RMS(τ_ankle) / RMS(τ_all joints), the ankles as for the flat walks: double support / single "
+        "support / flying foot.\n",
+        pgm_table(terrain, results),
+        "\n### Control tick (Table 4.10 [L4932-4940])\n",
+        tick_table(terrain, results, cal),
+        "\n### Normal-force jumps at the contact switches\n",
+        force_table(terrain, results),
+        "\n### Acceptance of issue 14\n",
+        acceptance(walks, results, obstacle_changes),
+    ]
 
 
 def pattern_settings(walks: list[Walk]) -> str:
@@ -678,10 +1100,32 @@ def peer_text(comparisons: list[dict[str, object]], cal: dict[str, object]) -> s
     return "\n".join(text)
 
 
+def given_parameters(path: Path) -> dict[str, str]:
+    """Every parameter a graph file gives its entities, as ``entity.param`` -> its repr."""
+    graph = dg.load(str(path))
+    return {f"{name}.{param}": repr(value) for name, entity in graph.entities.items()
+            for param, value in entity.given_params.items()}
+
+
+def obstacle_changes() -> list[str] | None:
+    """The parameters talos_obstacles gives otherwise than ``FLAT_REFERENCE`` (None if either graph
+    file is missing or does not load)."""
+    paths = [graph_path("talos_obstacles"), graph_path(FLAT_REFERENCE)]
+    try:
+        obstacles, flat = map(given_parameters, paths)
+    except (OSError, DGraphError):
+        return None
+    return sorted(name for name in obstacles.keys() | flat.keys() if obstacles.get(name) != flat.get(name))
+
+
 def main() -> None:
     """Run the walks, evaluate them, plan with both planners, write the document."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--graphs", nargs="+", default=list(WALKS), help="graph names (graphs/) or .yaml paths")
+    chosen = parser.add_mutually_exclusive_group()
+    chosen.add_argument("--graphs", nargs="+", default=list(WALKS),
+                        help=f"graph names (graphs/) or .yaml paths (default: {' '.join(WALKS)})")
+    chosen.add_argument("--terrain", action="store_const", dest="graphs", const=TERRAIN_GRAPHS,
+                        help=f"only the walks over a terrain: {' '.join(TERRAIN_GRAPHS)}")
     parser.add_argument("--out", type=Path, default=ROOT / "out" / "walking")
     parser.add_argument("--doc", type=Path, default=ROOT / "docs" / "walking.md")
     parser.add_argument("--no-placo", action="store_true", help="leave the placo peer out")
@@ -705,7 +1149,7 @@ def main() -> None:
     load = busy.stop()
     after = calibrate()
     command = " ".join([".venv/bin/python", "bench/walking.py", *sys.argv[1:]])
-    text = document(command, walks, results, comparisons, (before, after), load, images)
+    text = document(command, walks, results, comparisons, (before, after), load, images, obstacle_changes())
     args.doc.write_text(text)
     print(text)
 
