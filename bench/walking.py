@@ -221,6 +221,11 @@ def has_signal(graph: dg.Graph, name: str) -> bool:
     return entity in graph and signal in graph[entity].ports
 
 
+def one_line(error: Exception) -> str:
+    """An error's message on one line."""
+    return " ".join(str(error).split())
+
+
 def prepared(walk: Walk, out: Path) -> dg.Graph | None:
     """The graph with its observers replaced by the evaluation's Recorder, or None (``walk.problem`` set)."""
     if not walk.path.is_file():
@@ -230,7 +235,7 @@ def prepared(walk: Walk, out: Path) -> dg.Graph | None:
     try:
         graph = dg.load(str(walk.path))
     except DGraphError as error:
-        walk.problem = f"not run: the graph does not load: {error}"
+        walk.problem = f"not run: the graph does not load: {one_line(error)}"
         return None
     for name in [name for name, entity in graph.entities.items() if entity.observes]:
         graph.remove(name)
@@ -261,14 +266,18 @@ def run(walk: Walk, out: Path) -> None:
     walk.terrain = graph["footsteps"].walked_terrain(0)
     fallen: list[bool] = []
     start = time.perf_counter()
-    with graph, tqdm(total=ticks, unit="tick", desc=walk.name, mininterval=0.5) as bar:
-        for tick in range(ticks):
-            # this tick's state, recorded by the step
-            fallen.append(bool(device.fallen(tick)) or has_fallen(walk.terrain, device.q(tick)[:3]))
-            graph.step()
-            bar.update()
-            if fallen[-1]:
-                break
+    try:
+        with graph, tqdm(total=ticks, unit="tick", desc=walk.name, mininterval=0.5) as bar:
+            for tick in range(ticks):
+                # this tick's state, recorded by the step
+                fallen.append(bool(device.fallen(tick)) or has_fallen(walk.terrain, device.q(tick)[:3]))
+                graph.step()
+                bar.update()
+                if fallen[-1]:
+                    break
+    except DGraphError as error:
+        walk.problem = f"stopped at {(len(fallen) - 1) * graph.dt:.3f} s by an error: {one_line(error)}"
+        return
     walk.wall, walk.fallen = time.perf_counter() - start, np.array(fallen)
     walk.data, walk.durations, walk.dt = graph["evaluation"].data(), np.array(durations[1:]), graph.dt
     walk.plan, walk.transition = graph["footsteps"].plan(0), graph["schedule"].transition
@@ -608,9 +617,10 @@ def compare_planners(walks: list[Walk], results: dict[str, dict], out: Path) -> 
 
 # -- the document -------------------------------------------------------------------------------------
 def table(header: list[str], rows: list[list[str]]) -> str:
-    """A markdown table."""
+    """A markdown table (a cell's line breaks and bars, as in an error message, made safe)."""
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return "\n".join(lines + ["| " + " | ".join(row) + " |" for row in rows])
+    cells = [[cell.replace("\n", " ").replace("|", "\\|") for cell in row] for row in rows]
+    return "\n".join(lines + ["| " + " | ".join(row) + " |" for row in cells])
 
 
 def triple(values: tuple[float, ...] | np.ndarray, scale: float = 1e3, digits: int = 1) -> str:
