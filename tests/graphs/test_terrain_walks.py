@@ -19,38 +19,15 @@ import numpy as np
 import pytest
 
 import dgraph as dg
-from dgraph_sim.truth import robot_mass, true_com_and_frames
+from dgraph_sim.truth import robot_mass
 
 ROOT = Path(__file__).resolve().parents[2]
 GRAVITY = 9.81
-SOLES = ("left_sole_link", "right_sole_link")
 SETTLING = 50  # ticks of MuJoCo's initial contact settling left out of the ZMP errors
 SLIP_START = 150  # ticks after a stance begins from which its sole must stay put (touch-down settled)
 
 WALKS = ("talos_stairs", "talos_platforms", "talos_obstacles")
 THESIS_ZMP_PEAK = {"talos_stairs": (0.049, 0.047), "talos_platforms": (0.107, 0.058)}  # Tables 4.7, 4.6 (m)
-
-
-def run_walk(name: str, folder: Path) -> tuple[dg.Graph, dict[str, np.ndarray], np.ndarray, np.ndarray]:
-    graph = dg.load(str(ROOT / "graphs" / f"{name}.yaml"),
-                    {"recorder.rerun": "off", "recorder.npz_path": str(folder / f"{name}.npz")})
-    with graph:
-        graph.run(duration=graph.duration, progress=False)
-    data = graph["recorder"].data()
-    com, soles = true_com_and_frames(data["device.q"], SOLES)
-    return graph, data, com, soles
-
-
-@pytest.fixture(scope="module")
-def walks(tmp_path_factory):
-    """Each walk's run, made once for the module when a test first asks for it."""
-    runs: dict[str, tuple] = {}
-
-    def get(name: str) -> tuple:
-        if name not in runs:
-            runs[name] = run_walk(name, tmp_path_factory.mktemp(name))
-        return runs[name]
-    return get
 
 
 @pytest.fixture(scope="module", params=WALKS)

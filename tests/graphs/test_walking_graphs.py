@@ -11,43 +11,16 @@ plan's final position; no contact-force jump above 5 % of the weight per tick).
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-import dgraph as dg
 from dgraph.evaluation import cost_of_transport, mechanical_energy
-from dgraph_sim.truth import robot_mass, true_com_and_frames
+from dgraph_sim.truth import robot_mass
 
-ROOT = Path(__file__).resolve().parents[2]
 GRAVITY = 9.81
-SOLES = ("left_sole_link", "right_sole_link")
 
 
 WALKS = {"talos_walk_20cm": 1.2, "talos_walk_60cm": 3.6}  # the thesis's advance (m)
-
-
-def run_walk(name: str, folder: Path) -> tuple[dg.Graph, dict[str, np.ndarray], np.ndarray, np.ndarray]:
-    graph = dg.load(str(ROOT / "graphs" / f"{name}.yaml"),
-                    {"recorder.rerun": "off", "recorder.npz_path": str(folder / f"{name}.npz")})
-    with graph:
-        graph.run(duration=graph.duration, progress=False)
-    data = graph["recorder"].data()
-    com, soles = true_com_and_frames(data["device.q"], SOLES)
-    return graph, data, com, soles
-
-
-@pytest.fixture(scope="module")
-def walks(tmp_path_factory):
-    """Each walk's run, made once for the module when a test first asks for it."""
-    runs: dict[str, tuple] = {}
-
-    def get(name: str) -> tuple:
-        if name not in runs:
-            runs[name] = run_walk(name, tmp_path_factory.mktemp(name))
-        return runs[name]
-    return get
 
 
 @pytest.fixture(scope="module", params=list(WALKS))
