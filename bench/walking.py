@@ -488,7 +488,7 @@ def draw_side_view(axes: plt.Axes, walk: Walk, result: dict[str, object]) -> Non
     for i, side in enumerate(SIDES):
         y = side_line(walk.plan, side)
         axes.plot(x, [walk.terrain.height_at(xi, y) for xi in x], color=colours[side], linewidth=0.8, alpha=0.5,
-                  label=f"terrain along the {side} foot's line (y {y:+.3f} m)")
+                  label=f"terrain under the {side} foot (y {y:+.3f} m)")
         axes.plot(result["soles"][mask, i, 0], result["soles"][mask, i, 2], color=colours[side],
                   linewidth=widths[side], alpha=0.8, label=f"{side} sole (true)")
         reference = data[f"{side}_swing.position"][mask]
@@ -535,7 +535,7 @@ def plot_walk(path: Path, walk: Walk, result: dict[str, object]) -> None:
         draw_side_view(panels[-1], walk, result)
     for axes in panels:
         axes.grid(alpha=0.3)
-    figure.savefig(path, dpi=80)
+    figure.savefig(path, dpi=80, bbox_inches="tight")
     plt.close(figure)
 
 
