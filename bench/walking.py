@@ -126,6 +126,8 @@ SLIP_SETTLING = 0.150  # s into a stance interval at which the sole's position b
 SLIP_LIMIT = 0.02  # m: the largest slip issue 14 accepts
 SWING_OFF_PATH = 0.03  # m of a swinging sole from its reference: a sign before a fall
 COM_OFF_PLAN = 0.05  # m of the true CoM from its plan, horizontally: a sign before a fall
+LOW_RELIEF = 0.05  # m: a terrain lower than this is drawn from the side zoomed on the feet
+SIDE_COLOURS = {"left": "tab:blue", "right": "tab:red"}
 PLACO_PYTHON = ROOT / ".venv-placo" / "bin" / "python"
 
 # The thesis (Gazebo), /work/shared/reference/walking_mptc_actuators_drilling.md §1.7, keyed by (scheme, walk).
@@ -448,7 +450,7 @@ def draw_plan(axes: plt.Axes, plan: FootstepPlan) -> None:
     placements += [(step.side, step.placement) for step in plan.steps]
     for side, placement in placements:
         corners = plan.sole.corners(placement)[:, :2]
-        axes.fill(corners[:, 0], corners[:, 1], fill=False, color="tab:blue" if side == "left" else "tab:red",
+        axes.fill(corners[:, 0], corners[:, 1], fill=False, color=SIDE_COLOURS[side],
                   linewidth=0.8, zorder=1)
 
 
@@ -474,30 +476,39 @@ def side_line(plan: FootstepPlan, side: str) -> float:
     return float(np.median([plan.sole.center(placement)[1] for placement in placements]))
 
 
-def draw_side_view(axes: plt.Axes, walk: Walk, result: dict[str, object]) -> None:
-    """The walk seen from its right (x-z): each surface as the box under it (grey), the terrain's
-    height along each foot's line (``side_line``), the planned and true CoM, the true soles' paths
-    and their references (``<side>_swing.position``)."""
-    mask, data = result["mask"], walk.data
+def draw_terrain_side(axes: plt.Axes, walk: Walk, x: np.ndarray) -> None:
+    """The terrain seen from the right: each surface as the box under it (grey), and its height
+    along each foot's line (``side_line``) at ``x``."""
     for surface in walk.terrain.surfaces:
         corners = surface.corners()[:, [0, 2]]
         box = convex_hull(np.vstack([corners, np.column_stack([corners[:, 0], np.zeros(4)])]))
         axes.fill(box[:, 0], box[:, 1], color="0.9", edgecolor="0.6", linewidth=0.6, zorder=0)
-    x = np.linspace(result["soles"][mask, :, 0].min() - 0.2, result["soles"][mask, :, 0].max() + 0.2, 1200)
-    colours, widths = {"left": "tab:blue", "right": "tab:red"}, {"left": 2.4, "right": 1.0}  # left under right
-    for i, side in enumerate(SIDES):
+    for side in SIDES:
         y = side_line(walk.plan, side)
-        axes.plot(x, [walk.terrain.height_at(xi, y) for xi in x], color=colours[side], linewidth=0.8, alpha=0.5,
-                  label=f"terrain under the {side} foot (y {y:+.3f} m)")
-        axes.plot(result["soles"][mask, i, 0], result["soles"][mask, i, 2], color=colours[side],
-                  linewidth=widths[side], alpha=0.8, label=f"{side} sole (true)")
+        axes.plot(x, [walk.terrain.height_at(xi, y) for xi in x], color=SIDE_COLOURS[side], linewidth=0.8,
+                  alpha=0.5, label=f"terrain under the {side} foot (y {y:+.3f} m)")
+
+
+def draw_side_view(axes: plt.Axes, walk: Walk, result: dict[str, object]) -> None:
+    """The walk seen from its right (x-z): the terrain (:func:`draw_terrain_side`), the true soles'
+    paths and their references (``<side>_swing.position``), the planned and true CoM; on a terrain
+    lower than ``LOW_RELIEF``, z zoomed on the feet, without the CoM."""
+    mask, data = result["mask"], walk.data
+    soles = result["soles"][mask]
+    draw_terrain_side(axes, walk, np.linspace(soles[:, :, 0].min() - 0.2, soles[:, :, 0].max() + 0.2, 1200))
+    for i, side in enumerate(SIDES):
+        axes.plot(soles[:, i, 0], soles[:, i, 2], color=SIDE_COLOURS[side], linewidth=2.4 if side == "left" else 1.0,
+                  alpha=0.8, label=f"{side} sole (true)")  # the left one wider: under the right one when they meet
         reference = data[f"{side}_swing.position"][mask]
-        axes.plot(reference[:, 0], reference[:, 2], color=colours[side], linewidth=0.8, linestyle="--",
+        axes.plot(reference[:, 0], reference[:, 2], color=SIDE_COLOURS[side], linewidth=0.8, linestyle="--",
                   label=f"{side} sole reference")
-    axes.plot(result["com"][mask, 0], result["com"][mask, 2], color="k", linewidth=1.4, label="CoM (true)")
-    planned = data["pattern.com_position"][mask]
-    axes.plot(planned[:, 0], planned[:, 2], color="k", linewidth=1.0, linestyle="--", label="CoM plan")
-    axes.set(aspect="equal", xlabel="x (m)", ylabel="z (m)", title="side view (seen from the right)")
+    if max(surface.corners()[:, 2].max() for surface in walk.terrain.surfaces) < LOW_RELIEF:
+        axes.set(xlabel="x (m)", ylabel="z (m)", title="side view (seen from the right), z zoomed on the feet")
+    else:
+        axes.plot(result["com"][mask, 0], result["com"][mask, 2], color="k", linewidth=1.4, label="CoM (true)")
+        planned = data["pattern.com_position"][mask]
+        axes.plot(planned[:, 0], planned[:, 2], color="k", linewidth=1.0, linestyle="--", label="CoM plan")
+        axes.set(aspect="equal", xlabel="x (m)", ylabel="z (m)", title="side view (seen from the right)")
     axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=9)
 
 
