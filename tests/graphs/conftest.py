@@ -5,15 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pytest
-
-import dgraph as dg
-from dgraph_sim.truth import true_com_and_frames
+from walk_runs import run_walk
 
 HERE = Path(__file__).parent
-ROOT = HERE.parents[1]
-SOLES = ("left_sole_link", "right_sole_link")
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
@@ -21,18 +16,6 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     for item in items:
         if HERE in Path(item.fspath).parents:
             item.add_marker(pytest.mark.sim)
-
-
-def run_walk(name: str, folder: Path) -> tuple[dg.Graph, dict[str, np.ndarray], np.ndarray, np.ndarray]:
-    """Run ``graphs/<name>.yaml`` to its duration, recording into ``folder``: the graph, its
-    recording, and the true CoM and soles (from ``device.q``) at every tick."""
-    graph = dg.load(str(ROOT / "graphs" / f"{name}.yaml"),
-                    {"recorder.rerun": "off", "recorder.npz_path": str(folder / f"{name}.npz")})
-    with graph:
-        graph.run(duration=graph.duration, progress=False)
-    data = graph["recorder"].data()
-    com, soles = true_com_and_frames(data["device.q"], SOLES)
-    return graph, data, com, soles
 
 
 @pytest.fixture(scope="module")

@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_walking_graphs import GRAVITY, robot_mass, run_walk
+from test_walking_graphs import GRAVITY, robot_mass
+from walk_runs import run_walk
 
 SCHEMES = ("talos_walk_20cm_tsid_position", "talos_walk_20cm_ik")
 
