@@ -132,6 +132,22 @@ def test_the_reference_zmp_and_dcm_follow_the_lipm():
                        [[0.0, 0.5 / omega**2]])
 
 
+def test_on_a_tread_omega_and_the_zmps_are_counted_from_the_ground_height_input():
+    """Six 10 cm stairs up, the plan's CoM 0.88 m above the tread at 0.6 m: plugged from the
+    pattern's plane, omega is the plan's, and the reference and desired ZMPs lie on the tread;
+    unplugged, the height parameter (0) gives the flat ground's."""
+    tread = 0.6
+    entity = stabilizer(reference_position=[0.0, 0.0, tread + HEIGHT], com=[0.0, 0.0, tread + HEIGHT],
+                        reference_acceleration=[0.3, 0.0, 0.0])
+    assert entity.omega(0) == pytest.approx(natural_frequency(tread + HEIGHT))  # from z = 0: 2.58 rad/s
+    entity.ground_height.set(tread)
+    omega = natural_frequency(HEIGHT)
+    assert entity.omega(1) == pytest.approx(omega)  # 3.34 rad/s
+    assert np.allclose(entity.zmp_reference(1), [-0.3 / omega**2, 0.0, tread])
+    assert entity.desired_zmp(1)[2] == tread
+    assert DcmAdmittance("other", height=0.2).ground_height(0) == 0.2
+
+
 class PositionControlledLipm(dg.Device):
     """A linear inverted pendulum ``c_ddot = omega^2 (c - p) + f / m`` (horizontal), balanced by a
     position controller: it tracks the CoM reference with ``c_ddot_d = c_ddot* + kp (c* - c) +
