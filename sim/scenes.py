@@ -126,24 +126,22 @@ class Scene:
     def surface(self, surface: Surface, friction: float = 1.0,
                 rgba: Sequence[float] = TERRAIN_RGBA[0]) -> mujoco.MjsGeom:
         """A static box named as ``surface`` whose top face is the surface's rectangle and which
-        reaches the floor (z = 0) under all of it: the box has the surface's rotation ``R`` and
-        half extents ``(a, b)``, a depth ``d = max_k z_k / n_z`` (``z_k`` the corners' heights,
-        ``n`` the normal: the bottom face's highest corner is at z = 0) and its centre at
-        ``c - (d / 2) n``. A tilted box's sides lean with it: beyond the surface's high edge its
-        side comes down to the floor ``d sin(tilt)`` away (4.9 cm for the platforms' 0.181 m
-        edges), below the edge's height; a terrain puts the floor there. SceneError for an
-        unbounded surface or one not above the floor."""
+        reaches the floor (z = 0) under all of it (:meth:`Surface.box`, depth ``d``). A tilted
+        box's sides lean with it: beyond the surface's high edge its side comes down to the floor
+        ``d sin(tilt)`` away (4.9 cm for the platforms' 0.181 m edges), below the edge's height; a
+        terrain puts the floor there. SceneError for an unbounded surface or one not above the
+        floor."""
         if not surface.bounded:
             raise SceneError(f"surface {surface.name!r} is unbounded: no box has it as a face")
         highest = float(surface.corners()[:, 2].max())
         if highest <= 0.0:
             raise SceneError(f"surface {surface.name!r} is not above the floor (its highest corner at {highest} m)")
-        depth = highest / surface.normal[2]
+        centre, half_sizes, rotation = surface.box()
         quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(surface.placement[:3, :3]).reshape(-1))
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(rotation).reshape(-1))
         return self.spec.worldbody.add_geom(
-            name=surface.name, type=mujoco.mjtGeom.mjGEOM_BOX, size=[*surface.half_extents, depth / 2.0],
-            pos=(surface.center - 0.5 * depth * surface.normal).tolist(), quat=quat.tolist(),
+            name=surface.name, type=mujoco.mjtGeom.mjGEOM_BOX, size=half_sizes.tolist(),
+            pos=centre.tolist(), quat=quat.tolist(),
             friction=[friction, 0.005, 0.0001], rgba=list(rgba), contype=1, conaffinity=1, group=SCENE_GROUP)
 
     def terrain(self, terrain: Terrain, friction: float = 1.0) -> list[mujoco.MjsGeom]:

@@ -15,7 +15,7 @@ from dgraph.entities.recording.rerun_stream import (
 from dgraph.entities.recording.robot_view import quaternions_xyzw
 from dgraph.entities.recording.stream_view import StreamView
 from dgraph.entities.walking.footsteps import SIDES, FootstepPlan, convex_hull
-from dgraph.entities.walking.terrain import Surface, Terrain, flat
+from dgraph.entities.walking.terrain import Terrain, flat
 
 FOOT_COLORS = {"left": (40, 110, 230), "right": (230, 90, 40)}
 """The colour of each foot's footprints (RGB)."""
@@ -72,17 +72,6 @@ def support_polygon(plan: FootstepPlan, time: float) -> tuple[np.ndarray, float]
     return closed_strip(np.column_stack([hull, corners[nearest, 2]])), ground
 
 
-def surface_box(surface: Surface) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The centre (3,), half sizes (3,) and rotation (3, 3) of the box whose top face is the
-    bounded ``surface`` and which reaches the floor, the box :mod:`dgraph_sim.scenes` builds:
-    rotation ``R`` (the surface's), half sizes ``(a, b, d / 2)``, depth ``d = max_k z_k / n_z``
-    (``z_k`` the corners' heights, ``n`` the normal: the bottom face's highest corner on z = 0),
-    centre ``c - (d / 2) n``. A surface not above the floor is its rectangle alone (``d = 0``)."""
-    depth = max(float(surface.corners()[:, 2].max()), 0.0) / surface.normal[2]
-    half_sizes = np.array([*surface.half_extents, 0.5 * depth])
-    return surface.center - 0.5 * depth * surface.normal, half_sizes, surface.placement[:3, :3].copy()
-
-
 @dg.register
 class WalkingView(StreamView, dg.Entity):
     """Shows a walk in Rerun's 3D view, under the entity path ``path`` (default ``world/walking``).
@@ -90,9 +79,9 @@ class WalkingView(StreamView, dg.Entity):
     Static, at the first tick (again if the plugged terrain changes): ``<path>/terrain``, the
     terrain's bounded surfaces (not the floor: the :class:`~dgraph.entities.recording.RobotView`
     draws one), each as the solid box that :mod:`dgraph_sim.scenes` puts under it
-    (:func:`surface_box`: its top face the surface, tilted with it, reaching the floor; labelled
-    with the surface's name, colours alternating). Nothing for a terrain without surfaces (the
-    default, the floor alone).
+    (:meth:`~dgraph.entities.walking.terrain.Surface.box`: its top face the surface, tilted with
+    it, reaching the floor; labelled with the surface's name, colours alternating). Nothing for
+    a terrain without surfaces (the default, the floor alone).
 
     Static, when a plan is first drawn (again if the plugged plan changes): every planned
     footprint, ``<path>/footprints/left`` and ``<path>/footprints/right`` (one colour per foot),
@@ -237,7 +226,7 @@ class WalkingView(StreamView, dg.Entity):
             return
         centers, half_sizes, rotations = np.zeros((len(surfaces), 3)), np.zeros((len(surfaces), 3)), []
         for k, surface in enumerate(surfaces):
-            centers[k], half_sizes[k], rotation = surface_box(surface)
+            centers[k], half_sizes[k], rotation = surface.box()
             rotations.append(rotation)
         stream.rec.log(f"{self.path}/terrain", stream._rr.Boxes3D(
             centers=centers, half_sizes=half_sizes, quaternions=quaternions_xyzw(np.reshape(rotations, (-1, 3, 3))),

@@ -131,6 +131,17 @@ class Surface:
         local = np.array([[a, b, 0.0], [-a, b, 0.0], [-a, -b, 0.0], [a, -b, 0.0]])
         return self.center + local @ self.placement[:3, :3].T
 
+    def box(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The box whose top face is this bounded surface and which reaches the floor (z = 0)
+        under all of it, as the MuJoCo scenes build it and the recordings draw it: its centre (3,),
+        half sizes (3,) and rotation (3, 3). Rotation ``R`` (the surface's), half sizes ``(a, b,
+        d / 2)``, depth ``d = max_k z_k / n_z`` (``z_k`` the corners' heights, ``n`` the normal:
+        the bottom face's highest corner on z = 0), centre ``c - (d / 2) n``; a surface not above
+        the floor is its rectangle alone (``d = 0``)."""
+        depth = max(float(self.corners()[:, 2].max()), 0.0) / self.normal[2]
+        half_sizes = np.array([*self.half_extents, 0.5 * depth])
+        return self.center - 0.5 * depth * self.normal, half_sizes, self.placement[:3, :3].copy()
+
     def to_plain(self) -> dict[str, Any]:
         """The surface as plain data that :meth:`from_plain` reads back."""
         return {"name": self.name, "placement": self.placement.tolist(), "half_extents": list(self.half_extents)}

@@ -13,7 +13,6 @@ import pytest
 
 import dgraph as dg
 from dgraph.entities.recording import WalkingView
-from dgraph.entities.recording.walking_view import surface_box
 from dgraph.entities.walking.footsteps import FootstepPlan, terrain_walk, yaw_placement
 from dgraph.entities.walking.terrain import TERRAINS, Terrain, stairs, tilted_platforms
 from dgraph_sim.scenes import Scene
@@ -80,7 +79,7 @@ def test_each_surface_box_is_the_one_the_mujoco_scene_builds(name):
     Scene(spec).terrain(terrain)
     model = spec.compile()
     for surface in terrain.surfaces:
-        centre, half_sizes, rotation = surface_box(surface)
+        centre, half_sizes, rotation = surface.box()
         geom = model.geom(surface.name)
         np.testing.assert_allclose(centre, geom.pos, atol=1e-9)
         np.testing.assert_allclose(half_sizes, geom.size, atol=1e-9)
@@ -102,7 +101,7 @@ def test_the_terrain_is_logged_once_static_as_its_boxes(fixture, request):
     quaternions = chunk["Boxes3D:quaternions"][0]
     assert len(centres) == len(half_sizes) == len(quaternions) == len(terrain.surfaces) == 6
     for k, surface in enumerate(terrain.surfaces):
-        centre, half_size, _ = surface_box(surface)
+        centre, half_size, _ = surface.box()
         np.testing.assert_allclose(centres[k], centre, atol=FLOAT32)
         np.testing.assert_allclose(half_sizes[k], half_size, atol=FLOAT32)
         np.testing.assert_allclose(quaternion_rotation(quaternions[k]), surface.placement[:3, :3], atol=FLOAT32)
