@@ -635,9 +635,10 @@ def straight_walk(initial_left: np.ndarray, initial_right: np.ndarray, *, steps:
 
 
 def _straight_targets(initial_left: np.ndarray, initial_right: np.ndarray, steps: int, length: float,
-                      width: float | None, first_side: str, half_first: bool,
-                      half_last: bool) -> list[tuple[str, np.ndarray]]:
-    """The footsteps (side, flat placement) of :func:`straight_walk`, in order."""
+                      width: float | None, first_side: str, half_first: bool, half_last: bool,
+                      lateral_offset: float = 0.0) -> list[tuple[str, np.ndarray]]:
+    """The footsteps (side, flat placement) of :func:`straight_walk`, in order, on a path
+    ``lateral_offset`` (m) to the left of the initial feet's midline."""
     _check_count(steps)
     _check_side(first_side)
     frame = _WalkFrame.of(initial_left, initial_right, width)
@@ -646,10 +647,10 @@ def _straight_targets(initial_left: np.ndarray, initial_right: np.ndarray, steps
     side = first_side
     for index in range(steps):
         along[side] += length if index == 0 and half_first else 2.0 * length
-        targets.append((side, frame.sole(side, along[side])))
+        targets.append((side, frame.sole(side, along[side], lateral_offset)))
         side = other_side(side)
     along[side] = along[other_side(side)] + (0.0 if half_last else length)
-    targets.append((side, frame.sole(side, along[side])))
+    targets.append((side, frame.sole(side, along[side], lateral_offset)))
     return targets
 
 
@@ -688,32 +689,23 @@ def terrain_walk(terrain: Terrain, initial_left: np.ndarray, initial_right: np.n
     ``length`` or the terrain's ``start``), or if there is no surface under a sole centre.
     """
     if gait == "step_to":
-        targets = _step_to_targets(initial_left, initial_right, steps, length, width, first_side)
+        targets = _step_to_targets(initial_left, initial_right, steps, length, width, first_side, lateral_offset)
     elif gait == "alternate":
         targets = _straight_targets(initial_left, initial_right, steps, length, width, first_side, half_first,
-                                    half_last)
+                                    half_last, lateral_offset)
     else:
         raise ValueError(f"gait must be one of {', '.join(GAITS)}, got {gait!r}")
-    yaw = _WalkFrame.of(initial_left, initial_right, width).yaw
-    shift = lateral_offset * np.array([-math.sin(yaw), math.cos(yaw), 0.0])
-    targets = [(side, _translated(placement, shift)) for side, placement in targets]
     on_terrain = [(side, _on_surface(terrain, placement, sole, margin, index))
                   for index, (side, placement) in enumerate(targets)]
     return _plan(initial_left, initial_right, on_terrain, single_support, double_support, initial_double_support,
                  final_double_support, sole)
 
 
-def _translated(placement: np.ndarray, shift: np.ndarray) -> np.ndarray:
-    """``placement`` moved by ``shift`` (3, world)."""
-    moved = np.array(placement, dtype=float)
-    moved[:3, 3] += shift
-    return moved
-
-
 def _step_to_targets(initial_left: np.ndarray, initial_right: np.ndarray, steps: int, length: float,
-                     width: float | None, first_side: str) -> list[tuple[str, np.ndarray]]:
+                     width: float | None, first_side: str, lateral_offset: float) -> list[tuple[str, np.ndarray]]:
     """The footsteps (side, flat placement) of a step-to gait: ``steps`` times the ``first_side``
-    foot ``length`` ahead of the foremost foot, then the other beside it."""
+    foot ``length`` ahead of the foremost foot, then the other beside it, on a path
+    ``lateral_offset`` (m) to the left of the initial feet's midline."""
     _check_count(steps)
     _check_side(first_side)
     frame = _WalkFrame.of(initial_left, initial_right, width)
@@ -721,7 +713,7 @@ def _step_to_targets(initial_left: np.ndarray, initial_right: np.ndarray, steps:
     targets = []
     for _ in range(steps):
         along += length
-        targets += [(side, frame.sole(side, along)) for side in (first_side, other_side(first_side))]
+        targets += [(side, frame.sole(side, along, lateral_offset)) for side in (first_side, other_side(first_side))]
     return targets
 
 

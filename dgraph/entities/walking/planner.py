@@ -34,8 +34,7 @@ WALK_PARAMETERS: dict[str, tuple[str, ...]] = {
 }
 """The parameters each kind of walk reads (another one given is refused)."""
 
-WALK_PARAMETER_NAMES = {"steps", "length", "width", "first_side", "half_first", "half_last", "angle_per_step",
-                        "footsteps", "terrain", "gait", "lateral_offset", *TIMING}
+WALK_PARAMETER_NAMES = set().union(*WALK_PARAMETERS.values())
 
 
 def sole_placements(model: Any, left_frame: str, right_frame: str) -> tuple[np.ndarray, np.ndarray]:
