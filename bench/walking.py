@@ -61,6 +61,7 @@ import platform  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
+from collections.abc import Callable  # noqa: E402
 from dataclasses import dataclass, field  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -671,8 +672,11 @@ def thesis_label(walk: Walk) -> str:
     return "—" if walk.thesis is None else f"{walk.thesis[0]}, {walk.thesis[1]}"
 
 
-def summary_table(walks: list[Walk], results: dict[str, dict]) -> str:
-    """Outcome of every walk: fall, final base against the plan's final midpoint, wall time."""
+def outcome_table(walks: list[Walk], results: dict[str, dict], outcome: Callable[[Walk, dict], str | None],
+                  base_header: str, measure: tuple[str, Callable[[Walk, dict], str]]) -> str:
+    """One row per walk: its outcome (``outcome``, or that it walked to the end), the final base
+    against the plan's final midpoint, one ``measure`` column (header, cell) and the wall time."""
+    header, cell = measure
     rows = []
     for walk in walks:
         if walk.problem is not None:
@@ -680,13 +684,22 @@ def summary_table(walks: list[Walk], results: dict[str, dict]) -> str:
             continue
         result = results[walk.name]
         base, midpoint = result["final_base"], result["final_midpoint"]
-        outcome = fell(result) or f"walked to the end ({len(result['mask']) * walk.dt:.1f} s)"
-        rows.append([walk.name, thesis_label(walk), outcome, f"{base[0]:.3f}, {base[1]:.3f}",
-                     f"{midpoint[0]:.3f}, {midpoint[1]:.3f}",
-                     "—" if result["fall"] is not None else f"{1e3 * np.linalg.norm(base - midpoint):.0f}",
+        ended = outcome(walk, result) or f"walked to the end ({len(result['mask']) * walk.dt:.1f} s)"
+        rows.append([walk.name, thesis_label(walk), ended, f"{base[0]:.3f}, {base[1]:.3f}",
+                     f"{midpoint[0]:.3f}, {midpoint[1]:.3f}", cell(walk, result),
                      f"{walk.wall:.0f} s ({result['real_time_factor']:.2f})"])
-    return table(["graph", "thesis", "outcome", "base x, y at the end (m)", "plan's final midpoint x, y (m)",
-                  "distance (mm)", "wall time (real-time factor)"], rows)
+    return table(["graph", "thesis", "outcome", base_header, "plan's final midpoint x, y (m)", header,
+                  "wall time (real-time factor)"], rows)
+
+
+def summary_table(walks: list[Walk], results: dict[str, dict]) -> str:
+    """Outcome of every walk: fall, final base against the plan's final midpoint, wall time."""
+    def distance(_: Walk, result: dict) -> str:
+        if result["fall"] is not None:
+            return "—"
+        return f"{1e3 * np.linalg.norm(result['final_base'] - result['final_midpoint']):.0f}"
+    return outcome_table(walks, results, lambda _, result: fell(result), "base x, y at the end (m)",
+                         ("distance (mm)", distance))
 
 
 def zmp_rows(walk: Walk, result: dict[str, object], signs: bool = False) -> list[list[str]]:
@@ -793,22 +806,11 @@ def force_table(walks: list[Walk], results: dict[str, dict]) -> str:
 def terrain_summary_table(walks: list[Walk], results: dict[str, dict]) -> str:
     """Outcome of every terrain walk: the fall and its first signs, the final base against the
     plan's final midpoint, the CoM height against its plan, wall time."""
-    rows = []
-    for walk in walks:
-        if walk.problem is not None:
-            rows.append([walk.name, thesis_label(walk), walk.problem, "—", "—", "—", "—"])
-            continue
-        result = results[walk.name]
-        base, midpoint = result["final_base"], result["final_midpoint"]
-        outcome = fell_with_signs(walk, result) or f"walked to the end ({len(result['mask']) * walk.dt:.1f} s)"
-        height = result["com_height"]
-        rows.append([walk.name, thesis_label(walk), outcome, f"{base[0]:.3f}, {base[1]:.3f}",
-                     f"{midpoint[0]:.3f}, {midpoint[1]:.3f}",
-                     f"{1e3 * height.mean[0]:.1f} / {1e3 * height.peak[0]:.1f}",
-                     f"{walk.wall:.0f} s ({result['real_time_factor']:.2f})"])
-    return table(["graph", "thesis", "outcome", "base x, y at the end or the fall (m)",
-                  "plan's final midpoint x, y (m)", "CoM height error average / peak (mm)",
-                  "wall time (real-time factor)"], rows)
+    def height(_: Walk, result: dict) -> str:
+        error = result["com_height"]
+        return f"{1e3 * error.mean[0]:.1f} / {1e3 * error.peak[0]:.1f}"
+    return outcome_table(walks, results, fell_with_signs, "base x, y at the end or the fall (m)",
+                         ("CoM height error average / peak (mm)", height))
 
 
 def terrain_zmp_table(walks: list[Walk], results: dict[str, dict]) -> str:
