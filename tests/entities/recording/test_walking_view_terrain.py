@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import mujoco
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -15,7 +14,6 @@ import dgraph as dg
 from dgraph.entities.recording import WalkingView
 from dgraph.entities.walking.footsteps import FootstepPlan, terrain_walk, yaw_placement
 from dgraph.entities.walking.terrain import TERRAINS, Terrain, stairs, tilted_platforms
-from dgraph_sim.scenes import Scene
 from tests.conftest import Ticker
 from tests.entities.test_robot_view import read_rrd
 from tests.entities.test_walking_view import over_time
@@ -70,25 +68,6 @@ def on_platforms(tmp_path_factory) -> tuple[dict[str, list[dict[str, list]]], Te
 def quaternion_rotation(xyzw: list[float]) -> np.ndarray:
     x, y, z, w = xyzw
     return pin.Quaternion(w, x, y, z).normalized().matrix()
-
-
-@pytest.mark.parametrize("name", ["stairs10", "platforms", "obstacles"])
-def test_each_surface_box_is_the_one_the_mujoco_scene_builds(name):
-    terrain = TERRAINS[name]()
-    spec = mujoco.MjSpec()
-    Scene(spec).terrain(terrain)
-    model = spec.compile()
-    for surface in terrain.surfaces:
-        centre, half_sizes, rotation = surface.box()
-        geom = model.geom(surface.name)
-        np.testing.assert_allclose(centre, geom.pos, atol=1e-9)
-        np.testing.assert_allclose(half_sizes, geom.size, atol=1e-9)
-        matrix = np.zeros(9)
-        mujoco.mju_quat2Mat(matrix, geom.quat)
-        np.testing.assert_allclose(rotation, matrix.reshape(3, 3), atol=1e-9)
-        np.testing.assert_allclose(centre + half_sizes[2] * rotation[:, 2], surface.center, atol=1e-9)  # top face
-        bottom = centre + np.array([[x, y, -1.0] for x in (-1, 1) for y in (-1, 1)]) * half_sizes @ rotation.T
-        assert bottom[:, 2].max() == pytest.approx(0.0, abs=1e-9)  # reaching the floor
 
 
 @pytest.mark.parametrize("fixture", ["on_stairs", "on_platforms"])

@@ -351,3 +351,27 @@ def test_plain_data_forms_and_named_errors():
     for plain, error, message in cases:
         with pytest.raises(error, match=message):
             Terrain.from_plain(plain)
+
+
+def box_corners(centre: np.ndarray, half_sizes: np.ndarray, rotation: np.ndarray, face: float) -> np.ndarray:
+    """(4, 3) the corners of a box's top (``face`` 1) or bottom (-1) face, world axes."""
+    local = np.array([[x, y, face] for x in (-1.0, 1.0) for y in (-1.0, 1.0)]) * half_sizes
+    return centre + local @ rotation.T
+
+
+@pytest.mark.parametrize("name", ["stairs10", "platforms", "obstacles"])
+def test_the_box_of_each_surface_has_it_as_top_face_and_reaches_the_floor(name):
+    for surface in TERRAINS[name]().surfaces:
+        centre, half_sizes, rotation = surface.box()
+        np.testing.assert_array_equal(rotation, surface.placement[:3, :3])
+        np.testing.assert_allclose(half_sizes[:2], surface.half_extents, atol=1e-15)
+        top, corners = box_corners(centre, half_sizes, rotation, 1.0), surface.corners()
+        np.testing.assert_allclose(top[np.lexsort(top.T)], corners[np.lexsort(corners.T)], atol=1e-12)
+        assert box_corners(centre, half_sizes, rotation, -1.0)[:, 2].max() == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_box_of_a_surface_not_above_the_floor_is_its_rectangle():
+    sunk = tilted("sunk", [0.0, 0.0, -0.05], pitch=0.2)
+    centre, half_sizes, _ = sunk.box()
+    assert half_sizes[2] == 0.0
+    np.testing.assert_array_equal(centre, sunk.center)
