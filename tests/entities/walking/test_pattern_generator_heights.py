@@ -6,25 +6,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_footsteps_heights import stairs_plan
 
 import dgraph as dg
 from dgraph.control.status import SOLVED
-from dgraph.entities.walking.footsteps import FootstepPlan, straight_walk, terrain_walk, yaw_placement
+from dgraph.entities.walking.footsteps import FootstepPlan, straight_walk, yaw_placement
 from dgraph.entities.walking.pattern_generator import ZmpPatternGenerator
-from dgraph.entities.walking.terrain import stairs
 
 DT = 0.001
 HEIGHT = 0.87
 """The estimated CoM height above the ground at the first tick: the generator's ``h``."""
-LEFT0 = yaw_placement([-0.009, 0.085, 0.0])
-RIGHT0 = yaw_placement([-0.009, -0.085, 0.0])
 """TALOS's soles at half-sitting: their centres at (-0.014, +-0.085, 0), as the terrains assume."""
 OUTPUTS = ("com_position", "com_velocity", "com_acceleration", "zmp", "zmp_velocity", "dcm", "dcm_velocity")
-
-
-def stairs_climb(**timing) -> FootstepPlan:
-    """Up the default stairs, both feet on each tread (0.1 .. 0.6 m): 14.065 s at 0.9 s and 0.115 s."""
-    return terrain_walk(stairs(), LEFT0, RIGHT0, steps=6, length=0.30, gait="step_to", **timing)
 
 
 def run_open_loop(plan: FootstepPlan, seconds: float, **params) -> dict[str, np.ndarray]:
@@ -48,7 +41,7 @@ def run_open_loop(plan: FootstepPlan, seconds: float, **params) -> dict[str, np.
 
 @pytest.fixture(scope="module")
 def climb() -> tuple[FootstepPlan, dict[str, np.ndarray]]:
-    plan = stairs_climb()
+    plan = stairs_plan()
     return plan, run_open_loop(plan, plan.duration + 0.5)
 
 
@@ -114,7 +107,7 @@ def test_the_vertical_velocities_are_the_derivatives_of_the_heights(climb):
 def test_the_height_transition_adds_to_the_support_height():
     """A standing transition from 0.87 m to com_height 0.80 m over 1 s, on a climb whose first
     rise starts at 0.55 s: the CoM height is g + h + (h0 - h) (1 - s(x)), x = t dt / 1 s."""
-    plan = stairs_climb(initial_double_support=0.1)
+    plan = stairs_plan(initial_double_support=0.1)
     run = run_open_loop(plan, 1.5, com_height=0.80, height_transition=1.0)
     support, _ = plan_heights(plan, 1500)
     x = np.minimum(np.arange(1500) * DT / 1.0, 1.0)

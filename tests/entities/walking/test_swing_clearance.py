@@ -7,13 +7,12 @@ import math
 
 import numpy as np
 import pytest
+from test_footsteps_heights import LEFT0, RIGHT0
 
 from dgraph.entities.walking.footsteps import Footstep, FootstepPlan, SoleShape, terrain_walk, yaw_placement
 from dgraph.entities.walking.swing import SwingPath, swing_clearance, swing_clearances
 from dgraph.entities.walking.terrain import Surface, Terrain, stairs, tilted_platforms
 
-LEFT0 = yaw_placement([-0.009, 0.085, 0.0])
-RIGHT0 = yaw_placement([-0.009, -0.085, 0.0])
 """TALOS's soles at half-sitting: their centres at (-0.014, +-0.085, 0), as the terrains assume."""
 TALOS_SOLE = SoleShape()
 

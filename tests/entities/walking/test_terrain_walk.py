@@ -4,25 +4,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_footsteps_heights import LEFT0, RIGHT0, surface_names
 
-from dgraph.entities.walking.footsteps import FootstepPlan, straight_walk, terrain_walk, yaw_placement
+from dgraph.entities.walking.footsteps import straight_walk, terrain_walk, yaw_placement
 from dgraph.entities.walking.terrain import Terrain, flat, stairs, tilted_platforms
 
-LEFT0 = yaw_placement([-0.009, 0.085, 0.0])
-RIGHT0 = yaw_placement([-0.009, -0.085, 0.0])
 """TALOS's soles at half-sitting: their centres at (-0.014, +-0.085, 0), as the terrains assume."""
-
-
-def _surfaces(terrain: Terrain, plan: FootstepPlan) -> list[str]:
-    """The name of the surface under each footstep's sole centre."""
-    centres = [plan.sole.center(step.placement) for step in plan.steps]
-    return [terrain.surface_under(c[0], c[1]).name for c in centres]
 
 
 def test_on_the_stairs_a_0_30m_stride_puts_each_footstep_on_the_next_tread_at_its_height():
     terrain = stairs()
     plan = terrain_walk(terrain, LEFT0, RIGHT0, steps=6, length=0.30)
-    names = _surfaces(terrain, plan)
+    names = surface_names(terrain, plan)
     assert names == ["step_1", "step_2", "step_3", "step_4", "step_5", "landing", "landing"]
     for step, name in zip(plan.steps, names, strict=True):
         surface = terrain.surface(name)
@@ -40,7 +33,7 @@ def test_on_the_stairs_a_0_30m_stride_puts_each_footstep_on_the_next_tread_at_it
 def test_on_a_tilted_pad_the_sole_normal_is_the_pads_and_the_heading_is_kept_in_projection(first_side, tilted):
     terrain = tilted_platforms()
     plan = terrain_walk(terrain, LEFT0, RIGHT0, steps=4, length=0.30, width=0.28, first_side=first_side)
-    names = _surfaces(terrain, plan)
+    names = surface_names(terrain, plan)
     assert names == ["flat_1", *tilted, "flat_2", "flat_2"]
     for step, name in zip(plan.steps, names, strict=True):
         surface = terrain.surface(name)
