@@ -13,16 +13,15 @@ settling of its initial contact state, as docs/walking.md does.
 from __future__ import annotations
 
 import itertools
-from pathlib import Path
 
 import numpy as np
 import pytest
+from walk_runs import ROOT
 
 import dgraph as dg
+from dgraph.entities.stabilizers.lipm import GRAVITY
 from dgraph_sim.truth import robot_mass
 
-ROOT = Path(__file__).resolve().parents[2]
-GRAVITY = 9.81
 SETTLING = 50  # ticks of MuJoCo's initial contact settling left out of the ZMP errors
 SLIP_START = 150  # ticks after a stance begins from which its sole must stay put (touch-down settled)
 

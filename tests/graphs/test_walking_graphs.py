@@ -14,11 +14,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from dgraph.entities.stabilizers.lipm import GRAVITY
 from dgraph.evaluation import cost_of_transport, mechanical_energy
 from dgraph_sim.truth import robot_mass
-
-GRAVITY = 9.81
-
 
 WALKS = {"talos_walk_20cm": 1.2, "talos_walk_60cm": 3.6}  # the thesis's advance (m)
 

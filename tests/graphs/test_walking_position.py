@@ -20,15 +20,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_walking_graphs import GRAVITY, robot_mass
-from walk_runs import run_walk
+
+from dgraph.entities.stabilizers.lipm import GRAVITY
+from dgraph_sim.truth import robot_mass
 
 SCHEMES = ("talos_walk_20cm_tsid_position", "talos_walk_20cm_ik")
 
 
 @pytest.fixture(scope="module", params=SCHEMES)
-def walk(request, tmp_path_factory):
-    return request.param, *run_walk(request.param, tmp_path_factory.mktemp(request.param))
+def walk(request, walks):
+    return request.param, *walks(request.param)
 
 
 def test_the_walk_completes_and_ends_at_the_plans_final_midpoint(walk):
