@@ -249,3 +249,22 @@ def test_the_field_views_made_once_per_data_follow_every_pass_on_it(model):
         pin.computeAllTerms(model, data, q, v)
         np.testing.assert_array_equal(state.mass_matrix, data.M.T)
         np.testing.assert_array_equal(state.com.jacobian, data.Jcom)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_coriolis_matrix_gives_the_bias_forces_and_leaves_the_other_terms(model, seed):
+    """``C v + g = h`` and ``M_dot = C + C^T`` (finite differences along v); Pinocchio's call rewrites
+    the data's A_G, so every term read after it must still be a fresh pass's."""
+    q, v = random_state(model, seed)
+    state = state_at(model, q, v)
+    coriolis = state.coriolis_matrix
+    gravity = pin.computeGeneralizedGravity(model, model.createData(), q)
+    np.testing.assert_allclose(coriolis @ v + gravity, state.bias_forces, atol=1e-9)
+    step = 1e-6
+    masses = [state_at(model, pin.integrate(model, q, s * step * v), v).mass_matrix.copy() for s in (-1, 1)]
+    np.testing.assert_allclose(coriolis + coriolis.T, (masses[1] - masses[0]) / (2 * step), atol=1e-5)
+    fresh = state_at(model, q, v)
+    np.testing.assert_array_equal(state.centroidal_momentum_matrix, fresh.centroidal_momentum_matrix)
+    np.testing.assert_array_equal(state.centroidal_momentum, fresh.centroidal_momentum)
+    np.testing.assert_array_equal(state.centroidal_drift, fresh.centroidal_drift)
+    np.testing.assert_array_equal(state.frame(3).drift, fresh.frame(3).drift)

@@ -207,6 +207,14 @@ class RobotState:
         the pass's ``dA_G``."""
         return _read_only(self.fields.momentum_matrix_rate @ self.v)
 
+    @computed_once
+    def coriolis_matrix(self) -> np.ndarray:
+        """``C(q, v)`` (nv x nv) with ``C v + g = h`` and ``M_dot = C + C^T`` (Pinocchio's
+        ``computeCoriolisMatrix``). That call rewrites the data's ``A_G`` in a convention of its
+        own, so the momentum quantities read from it are computed first."""
+        _ = self.centroidal_momentum_matrix, self.centroidal_momentum
+        return _read_only(pin.computeCoriolisMatrix(self.model, self.data, self.q, self.v).copy())
+
     # -- frames -----------------------------------------------------------------------------
     def frame_id(self, name: str) -> int:
         """The Pinocchio id of frame ``name`` (KeyError if unknown)."""
