@@ -50,7 +50,7 @@ class HierarchicalInverseDynamics(StackCommands, TorqueSolver):
     follows the weighted tasks' power: use :class:`~dgraph.entities.solvers.InverseDynamicsSolver`).
 
     Parameters: those of :class:`~dgraph.entities.solvers.TorqueSolver` (``model``, ``tasks``,
-    ``contacts``, ``max_iterations`` for ProxQP, ``acceleration_weight``, ``fallback_damping``),
+    ``contacts``, ``max_iterations`` for ProxQP, ``fallback_damping``), ``acceleration_weight``,
     ``eps_abs`` (ProxQP's), ``priorities`` (one per task, 0 highest; default: one level per task
     in order), ``rank_tolerance``, ``closed_form``, ``constraint_tolerance``.
     Inputs: ``robot``, one per task (a Task's ``equation``), one per contact (a Contact6d's
@@ -68,12 +68,13 @@ class HierarchicalInverseDynamics(StackCommands, TorqueSolver):
     rank_tolerance = dg.Param(1e-9, kind="float", minimum=0.0, doc="relative rank threshold of the cascade")
     closed_form = dg.Param(True, kind="bool", doc="solve a level in closed form when no inequality binds")
     constraint_tolerance = dg.Param(1e-6, kind="float", minimum=0.0, doc="largest residual of the fixed level")
+    acceleration_weight = dg.Param(1e-6, kind="float", minimum=0.0, doc="regularisation of a")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
             self, name: str, *, model: str | Any = "talos", tasks: Sequence[str] = (), contacts: Sequence[str] = (),
-            max_iterations: int = 1000, acceleration_weight: float = 1e-06, fallback_damping: float = 1.0,
-            priorities: Sequence[int] = (), eps_abs: float = 1e-08, rank_tolerance: float = 1e-09,
-            closed_form: bool = True, constraint_tolerance: float = 1e-06,
+            max_iterations: int = 1000, fallback_damping: float = 1.0, priorities: Sequence[int] = (),
+            eps_abs: float = 1e-08, rank_tolerance: float = 1e-09, closed_form: bool = True,
+            constraint_tolerance: float = 1e-06, acceleration_weight: float = 1e-06,
         ) -> None: ...
 
     def configure(self) -> None:

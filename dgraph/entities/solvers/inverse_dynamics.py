@@ -42,8 +42,9 @@ class InverseDynamicsSolver(TorqueSolver):
     delivered power, pays for it), and only if that fails too does the fallback act.
 
     Parameters: those of ``TorqueSolver`` (``model``, ``tasks``, ``contacts``,
-    ``max_iterations``, ``acceleration_weight``, ``fallback_damping``), ``eps_abs`` (ProxQP
-    absolute tolerance, also the torque-limit margin), ``passive``.
+    ``max_iterations``, ``fallback_damping``), ``acceleration_weight`` (regularisation
+    ``eps ||a||^2``), ``eps_abs`` (ProxQP absolute tolerance, also the torque-limit margin),
+    ``passive``.
     Inputs: ``robot`` (RobotModel state), one per task (a Task's ``equation``), one per contact
     (a contact's ``contact``), ``passivity`` (with ``passive``).
     Outputs: ``solution`` (:class:`~dgraph.control.solutions.QPSolution`, everything below,
@@ -57,11 +58,12 @@ class InverseDynamicsSolver(TorqueSolver):
     eps_abs = dg.Param(DEFAULT_EPS_ABS, kind="float", minimum=1e-12, maximum=1e-3,
                        doc="ProxQP absolute tolerance (also the torque-limit margin)")
     passive = dg.Param(False, kind="bool", doc="declare a passivity input (an energy tank's, Eq. 5.34)")
+    acceleration_weight = dg.Param(1e-6, kind="float", minimum=0.0, doc="regularisation of a")
     if TYPE_CHECKING:  # written by python -m dgraph.signatures from the parameters
         def __init__(
             self, name: str, *, model: str | Any = "talos", tasks: Sequence[str] = (), contacts: Sequence[str] = (),
-            max_iterations: int = 1000, acceleration_weight: float = 1e-06, fallback_damping: float = 1.0,
-            eps_abs: float = 1e-06, passive: bool = False,
+            max_iterations: int = 1000, fallback_damping: float = 1.0, eps_abs: float = 1e-06, passive: bool = False,
+            acceleration_weight: float = 1e-06,
         ) -> None: ...
 
     def configure(self) -> None:

@@ -22,7 +22,8 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
     """Base of the entities that compute joint torques from task equations and contacts on the
     robot state, over the accelerations and the contact forces ``y = [a, f]``
     (:class:`~dgraph.entities.solvers.InverseDynamicsSolver`, weighted;
-    :class:`~dgraph.entities.hierarchy.HierarchicalInverseDynamics`, strict priorities).
+    :class:`~dgraph.entities.hierarchy.HierarchicalInverseDynamics`, strict priorities), or over
+    the torques and contact forces (:class:`~dgraph.entities.solvers.MptcSolver`, task forces).
 
     A subclass declares its ``eps_abs``, the output ``solution`` (a :class:`QPSolution`, with
     ``tau = M_j a + h_j - (J_c^T T)_j f``, thesis Eq. 2.4, or the fallback when it failed) and,
@@ -30,8 +31,7 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
 
     Parameters: ``model`` (sizes the ports; the same robot as the RobotModel), ``tasks`` and
     ``contacts`` (names of the inputs to declare, usually the names of the task and contact
-    entities plugged into them), ``max_iterations``, ``acceleration_weight``
-    (regularisation ``eps ||a||^2``), ``fallback_damping``.
+    entities plugged into them), ``max_iterations``, ``fallback_damping``.
     Inputs: ``robot`` (RobotModel state), one per task (a Task's ``equation``), one per contact
     (a contact's ``contact``).
     Outputs: ``solution``, ``tau`` (actuated torques), ``acceleration`` (nv),
@@ -54,7 +54,6 @@ class TorqueSolver(SolverReport, dg.Entity, abc.ABC):
     tasks = dg.Param((), kind="str_list", doc="task input names")
     contacts = dg.Param((), kind="str_list", doc="contact input names")
     max_iterations = dg.Param(1000, kind="int", minimum=1, doc="ProxQP iteration limit")
-    acceleration_weight = dg.Param(1e-6, kind="float", minimum=0.0, doc="regularisation of a")
     fallback_damping = dg.Param(1.0, kind="float", minimum=0.0, doc="joint damping of the fallback torque")
 
     robot = dg.Input(dtype=RobotState, doc="the RobotModel's shared state")
