@@ -6,20 +6,26 @@ matrix, with ``Lambda = (J M^-1 J^T)^+`` (Eq. 5.5; for a stacked, skinny ``J`` t
 ``J^+T M J^+``, Eq. 5.10) and ``P = Lambda K_P``:
 
 ```
-S      = 1/2 E^T P E                                                   storage (Eq. 5.11)
-S_dot  = E_dot^T P E + 1/2 E^T P_dot E                                  its rate
+S      = 1/2 E^T P E = 1/2 E^T P_s E                                   storage (Eq. 5.11)
+S_dot  = E_dot^T P_s E + 1/2 E^T P_dot E                                its rate
 B_sig  = X_dot^T Lambda K_D E_dot + X_dot*^T P E - 1/2 E^T P_dot E
-         - X_dot^T Lambda (X_ddot* - J_dot v)                           controllable power (Eq. 5.18)
+         + E_dot^T (P - P_s) E - X_dot^T Lambda (X_ddot* - J_dot v)    controllable power (Eq. 5.18)
 ```
 
-``X_dot* = X_dot - E_dot``. The uncontrollable power (Eq. 5.19) is
+``X_dot* = X_dot - E_dot`` and ``P_s = (P + P^T) / 2``, the symmetric part of ``P``, the only
+part a quadratic form sees (thesis App. 5, Eqs. 6.7-6.8). With equal gains within a task
+(``K_P = k I``, Table 5.2) ``P = P_s`` and these are the thesis's formulas. With unequal gains
+(a posture task's per-joint ``K_P``, errata E4) the thesis's ``S_dot = E_dot^T P E + ...`` is
+not the derivative of ``S``: on the 20 cm walk its posture term integrated to 6.1 J over 4 s
+while ``S`` changed by 0.7 J, a drain of the tank by a storage that never grew. Here ``S_dot``
+is the exact rate and the skew remainder ``E_dot^T (P - P_s) E`` is counted in ``B_sig``, so
+``S_dot + B_sig``, the power that the passivity bound uses, is unchanged. The uncontrollable power (Eq. 5.19) is
 ``B_phi = v^T (C v + g) - sum_k v^T J_k^T T_k f_k`` (:func:`uncontrollable_power`). With
 ``a = J^+ beta gamma (X_ddot* - J_dot v - K_P E - K_D E_dot)`` these satisfy the balance
 Eq. 5.25, ``-v^T (M a + h - tau_ext) = beta gamma (S_dot + B_sig) - B_phi``, which
 ``tests/entities/energy/test_power.py`` checks.
 
-``P_dot`` is the finite difference of ``P`` over one tick (errata E18); ``S_dot`` is the exact
-rate of ``S`` when ``P`` is symmetric, i.e. when ``K_P = k I`` within the block (errata E4).
+``P_dot`` is the finite difference of ``P`` over one tick (errata E18).
 """
 
 from __future__ import annotations
@@ -119,11 +125,13 @@ def task_power(block: TaskBlock, inertia: np.ndarray, stiffness_rate: np.ndarray
     """``S``, ``S_dot`` and ``B_sigma`` of a block, given ``Lambda`` and ``P_dot`` (module docstring)."""
     e, e_dot, x_dot = block.error, block.error_velocity, block.velocity
     stiffness_e = inertia @ (block.kp * e)                      # P e = Lambda K_P e
+    symmetric_e = 0.5 * (stiffness_e + block.kp * (inertia.T @ e))  # P_s e = (P + P^T) e / 2
     rate_term = 0.5 * float(e @ stiffness_rate @ e)              # 1/2 E^T P_dot E
     storage = 0.5 * float(e @ stiffness_e)
-    storage_rate = float(e_dot @ stiffness_e) + rate_term
+    storage_rate = float(e_dot @ symmetric_e) + rate_term
+    skew_power = float(e_dot @ (stiffness_e - symmetric_e))     # E_dot^T (P - P_s) E
     controllable = (float(x_dot @ inertia @ (block.kd * e_dot)) + float(block.reference_velocity @ stiffness_e)
-                    - rate_term - float(x_dot @ inertia @ (block.reference_acceleration - block.drift)))
+                    - rate_term + skew_power - float(x_dot @ inertia @ (block.reference_acceleration - block.drift)))
     return TaskPower(storage, storage_rate, controllable)
 
 

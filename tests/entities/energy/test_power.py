@@ -109,15 +109,18 @@ def test_unequal_gains_can_make_the_stacked_storage_form_indefinite():
     assert found
 
 
-def test_storage_rate_matches_the_finite_difference_of_storage():
-    """S_dot (with P_dot from the tank's finite difference) is the derivative of S: O(dt)."""
+@pytest.mark.parametrize("gains", [(40.0, 40.0, 40.0), (1.0, 10.0, 100.0)])
+def test_storage_rate_matches_the_finite_difference_of_storage(gains):
+    """S_dot (with P_dot from the tank's finite difference) is the derivative of S: O(dt), also
+    with unequal gains in a task (a posture task's per-joint K_P, errata E4), where ``Lambda K_P``
+    is not symmetric and only its symmetric part stores energy."""
     rng = np.random.default_rng(5)
     nv, m = 6, 3
     a = rng.normal(size=(nv, nv))
     mass0 = a @ a.T + nv * np.eye(nv)
     j0, j1 = rng.normal(size=(m, nv)), rng.normal(size=(m, nv))
     e0, e1 = rng.normal(size=m), rng.normal(size=m)
-    kp = np.full(m, 40.0)
+    kp = np.array(gains)
 
     def at(time):
         jacobian = j0 + time * j1 + 0.3 * np.sin(time) * j1
