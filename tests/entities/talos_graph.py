@@ -8,7 +8,7 @@ import dgraph as dg
 from dgraph.entities.contacts import Contact6d
 from dgraph.entities.features import CenterOfMass, FramePose, JointPosture
 from dgraph.entities.robot import RobotModel, load_model
-from dgraph.entities.solvers import InverseDynamicsSolver
+from dgraph.entities.solvers import InverseDynamicsSolver, TorqueSolver
 from dgraph.entities.tasks import Task
 
 TASKS = ("com_task", "posture_task", "waist_task")
@@ -20,9 +20,9 @@ def half_sitting() -> np.ndarray:
 
 
 def build(q: np.ndarray | None = None, v: np.ndarray | None = None, contact_forces: str = "corners",
-          **solver_params) -> dg.Graph:
+          solver_type: type[TorqueSolver] = InverseDynamicsSolver, **solver_params) -> dg.Graph:
     """Robot state set as constants; CoM held at its half-sitting position; two feet in contact
-    (Contact6d with ``forces=contact_forces``)."""
+    (Contact6d with ``forces=contact_forces``); the solver a ``solver_type``."""
     g = dg.Graph(dt=0.001, name="talos_id_test")
     robot = g.add(RobotModel("robot", frames=["left_sole_link"]))
     model = robot.pin_model
@@ -50,7 +50,7 @@ def build(q: np.ndarray | None = None, v: np.ndarray | None = None, contact_forc
         contact.kp.set(30.0)
         contact.kd.set(2 * np.sqrt(30.0))
         g.plug("robot.state", f"{side}_foot.robot")
-    g.add(InverseDynamicsSolver("solver", tasks=list(TASKS), contacts=list(CONTACTS), **solver_params))
+    g.add(solver_type("solver", tasks=list(TASKS), contacts=list(CONTACTS), **solver_params))
     g.plug("robot.state", "solver.robot")
     for name in TASKS:
         g.plug(f"{name}.equation", f"solver.{name}")
