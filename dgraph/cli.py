@@ -7,6 +7,10 @@
     dgraph check FILE
     dgraph profile FILE [--duration S | --ticks N] [--set entity.name=value ...]
     dgraph show FILE --format dot|mermaid [--signals] [-o OUT]
+    dgraph sweep FILE [FILE ...] [--set entity.name=value ...] [--grid KEY=V1,V2,... ...]
+                 [--bisect KEY=LOW:HIGH [--tolerance R]] [--duration S] [--fall-signal SIGNAL|none]
+                 [--measure SIGNAL ...] [--workers N] [--ray [ADDRESS]] [--timeout S]
+                 [--out CSV] [--plot PNG | --no-plot] [--resume | --fresh] [-q]
     dgraph entities [TYPE]
     dgraph identify RECORDING [--payload-recording P --payload-mass KG --payload-arm M | --drive-gain NM_PER_A]
                     [--time C] [--position C] [--velocity C] [--current C] [--torque C] [--joint J]
@@ -296,6 +300,67 @@ def cmd_show(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """Run a grid (or a bisection) of runs of graph files over ``--set`` keys, each in a fresh
+    process, locally or on Ray (see :mod:`dgraph.sweep`); the outcomes to a CSV table as they
+    come (a run of the table is not made again: an interrupted sweep resumes), a plot at the end."""
+    from dgraph.files import command_line_settings
+    from dgraph.sweep import Sweep, bisection_option, grid_axes, run_sweep
+
+    sweep = Sweep(args.files, settings=command_line_settings(args.set), grid=grid_axes(args.grid),
+                  bisection=bisection_option(args.bisect, args.tolerance) if args.bisect else None,
+                  duration=args.duration, fall_signal=None if args.fall_signal == "none" else args.fall_signal,
+                  measures=args.measure, timeout=args.timeout)
+    out = Path(args.out or Path("out") / f"sweep_{Path(args.files[0]).stem}.csv")
+    plot = None if args.no_plot else Path(args.plot or out.with_suffix(".png"))
+    try:
+        result = run_sweep(sweep, out, ray=args.ray, workers=args.workers, fresh=args.fresh, plot=plot,
+                           progress=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"{out}: the runs that finished are kept; the same command resumes the sweep", file=sys.stderr)
+        raise
+    print(result.summary())
+    return 0
+
+
+def _add_sweep(sub: argparse._SubParsersAction, shared: dict[str, argparse.ArgumentParser]) -> None:
+    """The ``sweep`` subcommand's options."""
+    sweep = sub.add_parser("sweep", help="run a grid or a bisection of runs over --set keys, each in its own "
+                                         "process, locally or on Ray", parents=[shared["set"]])
+    sweep.add_argument("files", nargs="+", metavar="FILE", help="graph files (several: one more grid axis)")
+    sweep.add_argument("--grid", action="extend", nargs="+", default=[], metavar="KEY=V1,V2",
+                       help="a grid axis: KEY=V1,V2,... or KEY=[V1, V2, ...], values read as --set reads them "
+                            "(a vector in brackets: KEY=[1,0,0],[0,1,0]); repeatable")
+    sweep.add_argument("--bisect", metavar="KEY=LOW:HIGH", help="in every grid cell, the largest value of KEY that "
+                                                                "survives: LOW must, HIGH must not (0 <= LOW < HIGH)")
+    sweep.add_argument("--tolerance", type=float, default=0.05, metavar="R",
+                       help="relative width at which a bisection stops, HIGH - LOW <= R HIGH (default 0.05)")
+    sweep.add_argument("--duration", type=float, metavar="S", help="seconds per run (default: each file's duration)")
+    sweep.add_argument("--fall-signal", default="auto", metavar="SIGNAL",
+                       help="bool signal that ends a run as fallen (default: device.fallen if the graph has it; "
+                            "none: no fall)")
+    sweep.add_argument("--measure", action="extend", nargs="+", default=[], metavar="SIGNAL",
+                       help="record a signal's final value: a scalar, a vector's norm, or SIGNAL[i] (repeatable)")
+    run = sweep.add_argument_group("execution")
+    run.add_argument("--workers", type=int, metavar="N", help="runs at a time (default: one per CPU, or the "
+                                                              "Ray cluster's CPUs)")
+    run.add_argument("--ray", nargs="?", const=True, default=False, metavar="ADDRESS",
+                     help="run on a Ray cluster: a local one, or the one at ADDRESS (write --ray=ADDRESS "
+                          "before the files)")
+    run.add_argument("--timeout", type=float, metavar="S", help="kill a run after S seconds of wall time")
+    run.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    out = sweep.add_argument_group("results")
+    out.add_argument("--out", metavar="CSV", help="the results table (default out/sweep_NAME.csv, NAME the first "
+                                                  "file's)")
+    plot = out.add_mutually_exclusive_group()
+    plot.add_argument("--plot", metavar="PNG", help="the plot (default: the table's name with .png)")
+    plot.add_argument("--no-plot", action="store_true", help="no plot")
+    again = out.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true", help="reuse the runs the table has (the default)")
+    again.add_argument("--fresh", action="store_true", help="start the table over: every run is made again")
+    sweep.set_defaults(func=cmd_sweep)
+
+
 def cmd_entities(args: argparse.Namespace) -> int:
     """List registered entity types with their documentation."""
     from dgraph.registry import entity_types, get_type
@@ -460,6 +525,7 @@ def build_parser() -> argparse.ArgumentParser:
     show.add_argument("--signals", action="store_true", help="signal-level drawing")
     show.add_argument("-o", "--output", metavar="OUT", help="write to this file instead of stdout")
     show.set_defaults(func=cmd_show)
+    _add_sweep(sub, shared)
     ents = sub.add_parser("entities", help="list the registered entity types")
     ents.add_argument("type", nargs="?", help="describe one type")
     ents.set_defaults(func=cmd_entities)
