@@ -16,13 +16,16 @@ $(STAMP): pyproject.toml
 demo: $(STAMP)
 	$(BIN)/dgraph run graphs/talos_sway.yaml --save out/talos_sway.rrd --npz out/talos_sway.npz
 
-## test: lint, then the whole test suite
+## test: lint, then the whole test suite, one pytest worker per CPU (a test file's tests stay on one worker, so
+## they share its module fixtures, the simulations run once)
+PYTEST := $(BIN)/python -m pytest -n logical --dist loadfile
+
 test: $(STAMP) lint
-	$(BIN)/python -m pytest
+	$(PYTEST)
 
 ## test-fast: the developer's loop, everything but the closed-loop TALOS simulations (marker `sim`)
 test-fast: $(STAMP) lint
-	$(BIN)/python -m pytest -m "not sim"
+	$(PYTEST) -m "not sim"
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
