@@ -88,7 +88,7 @@ def xvfb() -> Iterator[str]:
 # one, with one and a video; while each graph is open after its run, the MuJoCo windows that
 # xwininfo lists and a screenshot of the screen (Pillow over XCB); after close, the windows again.
 CHILD = r"""
-import json, subprocess, sys
+import json, subprocess, sys, time
 import numpy as np
 from PIL import ImageGrab
 import dgraph
@@ -99,16 +99,22 @@ def windows():
     tree = subprocess.run(["xwininfo", "-root", "-tree"], capture_output=True, text=True, check=True).stdout
     return [line.strip() for line in tree.splitlines() if '"MuJoCo :' in line]
 
+def colours():
+    screen = np.asarray(ImageGrab.grab(xdisplay=None).convert("RGB"))
+    return len(np.unique(screen.reshape(-1, 3), axis=0))
+
 def run(overrides):
     graph = dgraph.load(path, overrides)
     opened_before_run = windows()
     graph.run(duration=0.3, progress=False)
     q = graph.entity("device").q.value.tolist()
     shown = windows()
-    screen = np.asarray(ImageGrab.grab(xdisplay=None).convert("RGB"))
+    seen, deadline = colours(), time.monotonic() + 10.0
+    while shown and seen < 100 and time.monotonic() < deadline:  # the viewer draws in its own thread:
+        time.sleep(0.1)                                          # on a loaded machine, after the run
+        seen = max(seen, colours())
     graph.close()
-    return {"q": q, "before_run": opened_before_run, "shown": shown, "after_close": windows(),
-            "colours": len(np.unique(screen.reshape(-1, 3), axis=0))}
+    return {"q": q, "before_run": opened_before_run, "shown": shown, "after_close": windows(), "colours": seen}
 
 print(json.dumps({"plain": run({}), "viewer": run({"device.viewer": True}),
                   "video": run({"device.viewer": True, "device.video_path": video})}))
