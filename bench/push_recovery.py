@@ -1,15 +1,17 @@
 """The largest push each controller survives on TALOS in MuJoCo: MPTC, the ID solver and the energy-tank passive ID.
 
-    .venv/bin/python bench/push_recovery.py [--controllers mptc id tank] [--pushes swing_foot ...]
+    .venv/bin/python bench/push_recovery.py [--controllers mptc id tank mptc_sensed] [--pushes swing_foot ...]
         [--high 1500] [--tolerance 0.05] [--workers N | --ray [ADDRESS]] [--out out/push] [--fresh]
         [--plots docs] [--no-timing]
 
 Every (controller, push) pair is a file of ``graphs/push/`` (the controller's graph plus one push
-layer: a ``Pulse`` wrench on a body, its magnitude ``push.magnitude`` the one scalar bisected). One
+layer: a ``Pulse`` wrench on a body, its magnitude ``push.magnitude`` the one scalar bisected;
+``mptc_sensed``, MPTC with each foot's contact flag from the plan and its ankle F/T sensor, has the
+walking pushes only: it has no standing graph). One
 :mod:`dgraph.sweep` bisects that magnitude in every file at once, from 0 N (must survive) to
 ``--high`` (must fall), to the relative ``--tolerance``; a run survives when ``device.fallen``
-never turns true before its end (walking pushes: 2.555 s after the push, when the next two steps
-have landed; standing: 3.7 s after it). Each run is a fresh process; the table
+never turns true before its end (walking pushes: the end of the walk, 11 s, 6.555 s after the
+push; standing: 8 s, 6.7 s after it). Each run is a fresh process; the table
 (``--out``/push_sweep.csv) is written as runs end, so a second call reuses every run already made
 (``--fresh`` starts over) and ``--ray`` sends the runs to a Ray cluster.
 
@@ -42,9 +44,10 @@ import dgraph.loop
 from dgraph.sweep import Bisection, Sweep, Threshold, run_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
-CONTROLLERS = {"mptc": "MPTC", "id": "ID solver", "tank": "energy-tank passive ID"}
-WALKS = {"mptc": "talos_walk_20cm_mptc", "id": "talos_walk_20cm", "tank": "talos_walk_20cm_tank"}
-STANDING = {"mptc": "talos_mptc_standing", "id": "talos_standing", "tank": "talos_standing_tank"}
+CONTROLLERS = {"mptc": "MPTC", "id": "ID solver", "tank": "energy-tank passive ID",
+               "mptc_sensed": "MPTC, sensed contact flags"}
+WALKS = {"mptc": "talos_walk_20cm_mptc", "id": "talos_walk_20cm", "tank": "talos_walk_20cm_tank",
+         "mptc_sensed": "talos_walk_20cm_mptc_sensed"}
 PUSHES = {"swing_foot": "(a) right swing foot, -x", "torso_x": "(b) torso, x", "torso_y": "(b) torso, y",
           "torso_xy": "(b) torso, [F, F, 0]", "pelvis_standing": "(c) pelvis, x, standing"}
 PUSH_DURATION = 0.3  # s, every push layer's
@@ -59,7 +62,8 @@ def push_file(controller: str, push: str) -> str:
 
 
 def sweep(args: argparse.Namespace) -> list[Threshold]:
-    files = [push_file(c, p) for c in args.controllers for p in args.pushes]
+    """Every (controller, push) pair that has a file (the sensed contact flags have no standing graph)."""
+    files = [push_file(c, p) for c in args.controllers for p in args.pushes if (ROOT / push_file(c, p)).exists()]
     spec = Sweep(files, bisection=Bisection(KEY, 0.0, args.high, args.tolerance), measures=list(MEASURES))
     result = run_sweep(spec, Path(args.out) / "push_sweep.csv", ray=args.ray or False, workers=args.workers,
                        fresh=args.fresh, plot=Path(args.out) / "push_sweep.png")
@@ -91,7 +95,8 @@ def threshold_table(thresholds: list[Threshold], controllers: list[str], pushes:
     lines = ["| push | " + " | ".join(CONTROLLERS[c] for c in controllers) + " | MPTC / ID |",
              "|---|" + "---|" * (len(controllers) + 1)]
     for push in pushes:
-        cells = [cell_text(by_file[push_file(c, push)]) for c in controllers]
+        cells = [cell_text(by_file[push_file(c, push)]) if push_file(c, push) in by_file else "not run"
+                 for c in controllers]
         lines.append(f"| {PUSHES[push]} | " + " | ".join(cells) + f" | {ratio_text(by_file, push)} |")
     return "\n".join(lines)
 
@@ -167,11 +172,14 @@ def plots(thresholds: list[Threshold], controllers: list[str], pushes: list[str]
     figure, axis = plt.subplots(figsize=(9, 4))
     width = 0.8 / len(controllers)
     for i, controller in enumerate(controllers):
-        cells = [by_file[push_file(controller, p)] for p in pushes]
+        cells = [by_file.get(push_file(controller, p)) for p in pushes]
         positions = np.arange(len(pushes)) + i * width
-        axis.bar(positions, [cell.largest_surviving or 0.0 for cell in cells], width, label=CONTROLLERS[controller])
+        axis.bar(positions, [(cell.largest_surviving or 0.0) if cell else 0.0 for cell in cells], width,
+                 label=CONTROLLERS[controller])
         for position, cell in zip(positions, cells, strict=True):
-            if cell.verdict == "fails low":
+            if cell is None:
+                axis.text(position, 2.0, "not run", ha="center", va="bottom", fontsize=6, rotation=90)
+            elif cell.verdict == "fails low":
                 axis.text(position, 2.0, "falls\nunpushed", ha="center", va="bottom", fontsize=6, rotation=90)
     axis.set_xticks(np.arange(len(pushes)) + 0.4 - width / 2, [PUSHES[p] for p in pushes], fontsize=8)
     axis.set_ylabel("largest push survived (N, 0.3 s)")

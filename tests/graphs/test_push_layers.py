@@ -14,13 +14,15 @@ import dgraph as dg
 from dgraph.files import parse
 
 PUSH = Path(__file__).resolve().parents[2] / "graphs" / "push"
-WALKS = {"id": "talos_walk_20cm.yaml", "tank": "talos_walk_20cm_tank.yaml", "mptc": "talos_walk_20cm_mptc.yaml"}
+WALKS = {"id": "talos_walk_20cm.yaml", "tank": "talos_walk_20cm_tank.yaml", "mptc": "talos_walk_20cm_mptc.yaml",
+         "mptc_sensed": "talos_walk_20cm_mptc_sensed.yaml"}
 STANDING = {"id": "talos_standing.yaml", "tank": "talos_standing_tank.yaml", "mptc": "talos_mptc_standing.yaml"}
 PUSHED_BODY = {"swing_foot": "leg_right_6_link", "torso_x": "torso_2_link", "torso_y": "torso_2_link",
                "torso_xy": "torso_2_link", "pelvis_standing": "base_link"}
 DIRECTION = {"swing_foot": [-1, 0, 0], "torso_x": [1, 0, 0], "torso_y": [0, 1, 0], "torso_xy": [1, 1, 0],
              "pelvis_standing": [1, 0, 0]}
-FILES = [(controller, push) for controller in WALKS for push in PUSHED_BODY]
+FILES = [(controller, push) for controller in WALKS for push in PUSHED_BODY
+         if push != "pelvis_standing" or controller in STANDING]  # sensed flags: walking only
 
 
 def flat(path: Path) -> dict:
