@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -152,29 +152,29 @@ class MptcSolver(TorqueSolver):
             solution.tau = self.fallback_torque(t, state, solution.status)
         return solution
 
-    def _per_task(self, t: int, value: str) -> np.ndarray:
-        """One value per declared task (0 for a task left out, or on a failed tick)."""
+    def _per_task(self, t: int, value: Callable[[TaskForce, np.ndarray], float]) -> np.ndarray:
+        """``value(task, force_error)`` per declared task (0 for a task left out, or on a failed tick)."""
         solution: MptcSolution = self.solution(t)
         values = np.zeros(self.n_tasks)
         # a failed tick has no force errors: the zip is empty and every value 0
         for row, task, error in zip(solution.task_rows, solution.tasks, solution.force_errors, strict=False):
-            values[row] = task.storage() if value == "storage" else getattr(task, value)(error)
+            values[row] = value(task, error)
         return values
 
     @dg.output(shape=("n_tasks",), depends=("solution",))
     def task_storage(self, t: int) -> np.ndarray:
         """``V_k = x~_dot^T M_k x~_dot / 2 + x~^T K_k x~ / 2`` per task (J)."""
-        return self._per_task(t, "storage")
+        return self._per_task(t, lambda task, _: task.storage())
 
     @dg.output(shape=("n_tasks",), depends=("solution",))
     def task_storage_rate(self, t: int) -> np.ndarray:
         """``V_k_dot = -x~_dot^T D_k x~_dot + x~_dot^T f~_k`` per task (W)."""
-        return self._per_task(t, "storage_rate")
+        return self._per_task(t, TaskForce.storage_rate)
 
     @dg.output(shape=("n_tasks",), depends=("solution",))
     def task_port_power(self, t: int) -> np.ndarray:
         """``x~_dot^T f~_k`` per task (W): what the force error feeds the task."""
-        return self._per_task(t, "port_power")
+        return self._per_task(t, TaskForce.port_power)
 
     @dg.output(shape=(), depends=("solution", "task_storage"))
     def weighted_storage(self, t: int) -> float:
