@@ -64,6 +64,9 @@ class Run:
     measures: tuple[str, ...] = ()
     folder: str = field(default_factory=os.getcwd, compare=False, repr=False)
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "duration", float(self.duration))  # 1 and 1.0: one run, one table row
+
     def identity(self) -> tuple[Any, ...]:
         """What tells this run from another in a results table: the file, the settings' texts,
         the duration and the fall signal (not the measures: they are the table's columns)."""

@@ -1,7 +1,8 @@
 """The results file of a sweep: a CSV table with a header, one row per finished run appended and
 flushed as it arrives (in completion order), so that an interrupted sweep keeps every run it
 finished; read back when the sweep starts again, its rows are the outcomes of the runs they
-identify (:meth:`~dgraph.sweep.outcome.Run.identity`), which are not run again.
+identify (:meth:`~dgraph.sweep.outcome.Run.identity`), which are not run again, except a
+``crashed`` run (its process died: a killed machine, no memory), which is run again.
 
 Columns: ``file``, one per setting key (the value's YAML text, see
 :func:`~dgraph.sweep.spec.setting_text`), ``duration``, ``fall_signal``, ``status``, ``fall_time``,
@@ -13,6 +14,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import os
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -51,24 +53,26 @@ class ResultsTable:
         self.columns = header(setting_keys, measures)
         self._rows: dict[tuple[Any, ...], dict[str, str]] = {} if fresh else self._read()
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        if fresh or not self.path.exists():
+        if fresh or not self.path.exists() or self.path.stat().st_size == 0:  # no header yet
             self.path.write_text(_csv_line(self.columns))
         self._file = self.path.open("a", newline="", encoding="utf-8")
 
     def _read(self) -> dict[tuple[Any, ...], dict[str, str]]:
-        """The rows of an existing table by identity (a last line cut short by an interruption
-        dropped); a table with other columns is refused."""
+        """The rows of an existing table by identity, but ``crashed`` ones (a last line cut short
+        by an interruption is cut off the file in place, the lines before it untouched); a table
+        with other columns is refused."""
         if not self.path.exists():
             return {}
-        text = self.path.read_text(encoding="utf-8")
-        if not text.endswith("\n"):
-            text = text[:text.rfind("\n") + 1]
-            self.path.write_text(text, encoding="utf-8")
-        rows = list(csv.reader(io.StringIO(text)))
+        data = self.path.read_bytes()
+        if not data.endswith(b"\n"):
+            data = data[:data.rfind(b"\n") + 1]
+            os.truncate(self.path, len(data))
+        rows = list(csv.reader(io.StringIO(data.decode("utf-8"))))
         if rows and rows[0] != self.columns:
             raise SweepError(f"{self.path}: its columns ({', '.join(rows[0])}) are not this sweep's "
                              f"({', '.join(self.columns)}): give another results file, or start over (--fresh)")
-        records = [dict(zip(self.columns, row, strict=True)) for row in rows[1:] if len(row) == len(self.columns)]
+        records = [dict(zip(self.columns, row, strict=True)) for row in rows[1:]
+                   if len(row) == len(self.columns) and row[self.columns.index("status")] != "crashed"]
         return {self._identity(record): record for record in reversed(records)}  # the first row of a run wins
 
     def _identity(self, record: dict[str, str]) -> tuple[Any, ...]:
@@ -93,7 +97,8 @@ class ResultsTable:
             row = outcome.row()
             record = {column: _cell(row[column], column, self.setting_keys) for column in self.columns}
             self._file.write(_csv_line([record[column] for column in self.columns]))
-            self._rows.setdefault(outcome.run.identity(), record)
+            if outcome.status != "crashed":
+                self._rows.setdefault(outcome.run.identity(), record)
         self._file.flush()
 
     def close(self) -> None:

@@ -72,3 +72,37 @@ def test_a_table_of_another_sweep_is_refused(tmp_path):
         ResultsTable(path, ["push.gain"], MEASURES)
     ResultsTable(path, ["push.gain"], MEASURES, fresh=True).close()
     assert list(read_table(path)) == [] and path.read_text().startswith("file,push.gain,duration")
+
+
+@pytest.mark.parametrize("text", ["", "file,push.gai"], ids=["empty", "header cut short"])
+def test_a_table_without_a_whole_header_gets_one_and_resumes(tmp_path, text):
+    path = tmp_path / "r.csv"
+    path.write_text(text)  # interrupted before or while its header was written
+    with ResultsTable(path, KEYS, MEASURES) as table:
+        assert len(table) == 0
+        table.append([outcome(0.5)])
+    with ResultsTable(path, KEYS, MEASURES) as table:
+        assert table.reused(outcome(0.5).run) == outcome(0.5)
+    assert list(read_table(path)[0]) == header(KEYS, MEASURES)
+
+
+def test_a_crashed_run_is_run_again_and_its_next_outcome_is_kept(tmp_path):
+    path = tmp_path / "r.csv"
+    with ResultsTable(path, KEYS, MEASURES) as table:
+        table.append([outcome(0.5, "crashed"), outcome(1.5, "timeout")])
+        assert table.reused(outcome(0.5).run) is None  # a process that died says nothing of the run
+        assert table.reused(outcome(1.5).run).status == "timeout"
+    with ResultsTable(path, KEYS, MEASURES) as table:
+        assert table.reused(outcome(0.5).run) is None
+        table.append([outcome(0.5, "fell", 0.33)])
+    with ResultsTable(path, KEYS, MEASURES) as table:
+        assert table.reused(outcome(0.5).run) == outcome(0.5, "fell", 0.33)
+
+
+def test_a_duration_given_as_an_int_is_the_same_run(tmp_path):
+    with ResultsTable(tmp_path / "r.csv", KEYS, MEASURES) as table:
+        run = outcome(0.5).run
+        integral = Run(run.file, run.settings, 1, run.fall_signal, run.measures)
+        table.append([Outcome(integral, "ok", None, 1.0, 0.125, {"body.q[2]": 0.25})])
+    with ResultsTable(tmp_path / "r.csv", KEYS, MEASURES) as table:
+        assert table.reused(run) is not None and integral == run
