@@ -17,7 +17,7 @@ from typing import Any
 import yaml
 
 from dgraph.errors import DGraphError, GraphFileError
-from dgraph.files import command_line_value
+from dgraph.files import command_line_value, to_plain
 
 AUTO = "auto"
 """The fall signal chosen from the graph: ``device.fallen`` when it has one, none otherwise."""
@@ -28,21 +28,12 @@ class SweepError(DGraphError):
     """A sweep that cannot start: a file, key, value or option that is wrong."""
 
 
-def plain(value: Any) -> Any:
-    """``value`` as plain data: numpy scalars and arrays become Python numbers and lists; tuples lists."""
-    if hasattr(value, "tolist"):
-        return value.tolist()
-    if isinstance(value, list | tuple):
-        return [plain(v) for v in value]
-    return value
-
-
 def setting_text(value: Any) -> str:
     """The canonical text of a setting's value, as the command line would give it and as the
     results table stores it: YAML flow style (``0.1``, ``[0, 0.05, 0]``, ``true``, ``'1'`` for a
     string that would read as a number), read back to the same value by
     :func:`~dgraph.files.command_line_value`."""
-    text = yaml.safe_dump(plain(value), default_flow_style=True, width=math.inf, allow_unicode=True)
+    text = yaml.safe_dump(to_plain(value, "a setting"), default_flow_style=True, width=math.inf, allow_unicode=True)
     return text.removesuffix("\n").removesuffix("\n...").strip()
 
 
@@ -94,8 +85,9 @@ class Sweep:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "files", tuple(str(f) for f in self.files))
-        object.__setattr__(self, "settings", {_setting_key(k, "--set"): plain(v) for k, v in self.settings.items()})
-        object.__setattr__(self, "grid", {_setting_key(k, "--grid"): [plain(v) for v in values]
+        object.__setattr__(self, "settings", {_setting_key(k, "--set"): to_plain(v, f"--set {k}")
+                                              for k, v in self.settings.items()})
+        object.__setattr__(self, "grid", {_setting_key(k, "--grid"): [to_plain(v, f"--grid {k}") for v in values]
                                           for k, values in self.grid.items()})
         object.__setattr__(self, "measures", tuple(self.measures))
         self._check()
@@ -103,8 +95,13 @@ class Sweep:
     def _check(self) -> None:
         if not self.files:
             raise SweepError("no graph file to sweep")
-        if any(not values for values in self.grid.values()):
-            raise SweepError(f"--grid {next(k for k, v in self.grid.items() if not v)}: no value")
+        for key, values in self.grid.items():
+            texts = [setting_text(value) for value in values]
+            if not texts:
+                raise SweepError(f"--grid {key}: no value")
+            repeated = sorted({text for text in texts if texts.count(text) > 1})
+            if repeated:
+                raise SweepError(f"--grid {key}: {', '.join(repeated)} given more than once (one run per value)")
         keys = [*self.settings, *self.grid, *([self.bisection.key] if self.bisection else [])]
         twice = sorted({k for k in keys if keys.count(k) > 1})
         if twice:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import dgraph as dg
 from dgraph.files import command_line_value
 from dgraph.sweep.spec import Bisection, Sweep, SweepError, bisection_option, grid_axes, grid_axis, setting_text
 
@@ -58,6 +59,8 @@ def test_a_setting_text_reads_back_as_the_same_value(value):
     ({"settings": {"a.x": 1}, "grid": {"a.x": [1, 2]}}, "a.x: set more than once"),
     ({"grid": {"a.x": [1]}, "bisection": Bisection("a.x", 0, 1)}, "a.x: set more than once"),
     ({"grid": {"a.x": []}}, "a.x: no value"),
+    ({"grid": {"a.x": [0.3, 1, 0.3]}}, r"--grid a.x: 0.3 given more than once"),
+    ({"grid": {"a.v": [[1, 0], np.array([1, 0])]}}, r"--grid a.v: \[1, 0\] given more than once"),
     ({"settings": {"nodot": 1}}, "--set 'nodot'"),
     ({"duration": -1.0}, "--duration"),
     ({"timeout": 0.0}, "--timeout"),
@@ -66,6 +69,11 @@ def test_a_setting_text_reads_back_as_the_same_value(value):
 def test_a_sweep_that_cannot_be_run_is_refused(kwargs, message):
     with pytest.raises(SweepError, match=message):
         Sweep(**{"files": ["f.yaml"], **kwargs})
+
+
+def test_a_value_that_is_not_plain_data_is_refused_naming_its_option():
+    with pytest.raises(dg.GraphError, match="--grid a.x: a object cannot be written"):
+        Sweep(["f.yaml"], grid={"a.x": [object()]})
 
 
 def test_a_bisection_reads_key_low_high_and_checks_them():
