@@ -24,7 +24,7 @@ import time
 from multiprocessing.connection import Connection, wait
 from typing import Any
 
-from dgraph.sweep.outcome import Outcome, Run, run_graph
+from dgraph.sweep.outcome import Outcome, Run, one_line, run_graph
 
 PRELOAD = ["dgraph.sweep.preload"]
 POLL_SECONDS = 1.0
@@ -133,11 +133,16 @@ def run_isolated(run: Run, timeout: float | None = None) -> Outcome:
 def _child(sender: Connection, log: str, run: Run) -> None:
     """The run's process: no Ctrl-C, in the run's folder, output to ``log``, the outcome sent back."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    os.chdir(run.folder)
     with open(log, "wb") as out:
         os.dup2(out.fileno(), 1)
         os.dup2(out.fileno(), 2)
-    sender.send(run_graph(run))
+    try:
+        os.chdir(run.folder)
+    except OSError as exc:  # a node of a cluster without the checkout at the same path
+        sender.send(Outcome(run, "error", None, None, 0.0, {name: float("nan") for name in run.measures},
+                            f"the run's folder {run.folder} cannot be entered here: {one_line(exc)}"))
+    else:
+        sender.send(run_graph(run))
     sender.close()
 
 

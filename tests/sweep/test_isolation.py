@@ -66,6 +66,16 @@ def test_a_run_whose_process_dies_is_a_crashed_run(rising):
 
 def test_a_killed_run_gives_no_outcome_and_leaves_no_process(rising):
     isolated = IsolatedRun(Run(rising, ENDLESS, 1e5, FALL))
+    time.sleep(0.2)
+    assert isolated.poll() is None  # running
     isolated.kill()
     isolated.kill()
     assert not multiprocessing.active_children()
+    assert not os.path.exists(isolated._log)  # its log removed
+
+
+def test_a_folder_that_is_not_there_is_an_error_naming_it(rising, tmp_path):
+    gone = tmp_path / "gone"
+    outcome = run_isolated(Run(rising, {"push.gain": 2.3}, 1.0, FALL, ("body.q[2]",), folder=str(gone)))
+    assert outcome.status == "error" and f"the run's folder {gone} cannot be entered here" in outcome.message
+    assert math.isnan(outcome.measures["body.q[2]"])
