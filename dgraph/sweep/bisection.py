@@ -32,12 +32,6 @@ class Threshold:
     verdict: str
     outcomes: list[Outcome] = field(default_factory=list)
 
-    def row(self) -> dict[str, object]:
-        """The threshold as one row: the cell's file and settings, then what was found."""
-        return {"file": self.cell.file, **self.cell.settings, "key": self.key,
-                "largest_surviving": self.largest_surviving, "smallest_failing": self.smallest_failing,
-                "verdict": self.verdict, "runs": len(self.outcomes)}
-
 
 class CellBisection:
     """The bisection of ``bisection.key`` in the cell ``cell`` (a run without that key)."""

@@ -40,10 +40,6 @@ class SweepResult:
     plot: Path | None = None
     reused: int = 0
 
-    def rows(self) -> list[dict[str, Any]]:
-        """The outcomes as dicts (:meth:`~dgraph.sweep.outcome.Outcome.row`)."""
-        return [outcome.row() for outcome in self.outcomes]
-
     def counts(self) -> dict[str, int]:
         """How many runs ended with each status."""
         return dict(collections.Counter(outcome.status for outcome in self.outcomes))
