@@ -61,6 +61,11 @@ def _lasted(outcome: Outcome) -> float:
 
 def plot_grid(outcomes: Sequence[Outcome], axes: Sequence[str], path: str | Path) -> Path:
     """Draw the outcomes of a grid over the keys ``axes`` (see the module docstring) to ``path``."""
+    return _save(grid_figure(outcomes, axes), path)
+
+
+def grid_figure(outcomes: Sequence[Outcome], axes: Sequence[str]) -> Any:
+    """The matplotlib figure of :func:`plot_grid`."""
     files = list(dict.fromkeys(o.run.file for o in outcomes))
     figure, panels = _panels(files, "time lasted (s)" if len(axes) <= 1 else ", ".join(axes[1:]))
     x, x_labels = _positions([o.run.settings[axes[0]] if axes else 0 for o in outcomes])
@@ -81,11 +86,16 @@ def plot_grid(outcomes: Sequence[Outcome], axes: Sequence[str], path: str | Path
         next(iter(panels.values())).set_ylim(bottom=0.0)
     _label_axis(next(iter(panels.values())).yaxis, y_labels)
     _status_legend(figure, {o.status for o in outcomes})
-    return _save(figure, path)
+    return figure
 
 
 def plot_thresholds(thresholds: Sequence[Threshold], axes: Sequence[str], path: str | Path) -> Path:
     """Draw the largest surviving value of each bisected cell (see the module docstring) to ``path``."""
+    return _save(thresholds_figure(thresholds, axes), path)
+
+
+def thresholds_figure(thresholds: Sequence[Threshold], axes: Sequence[str]) -> Any:
+    """The matplotlib figure of :func:`plot_thresholds`."""
     files = list(dict.fromkeys(t.cell.file for t in thresholds))
     figure, panels = _panels(files, f"largest surviving {thresholds[0].key}" if thresholds else "")
     for file, panel in panels.items():
@@ -102,7 +112,7 @@ def plot_thresholds(thresholds: Sequence[Threshold], axes: Sequence[str], path: 
                                textcoords="offset points", ha="center", fontsize="x-small")
         panel.set_xticks(range(len(mine)), labels, rotation=30, ha="right", fontsize="small")
         panel.set_xlabel(", ".join(axes))
-    return _save(figure, path)
+    return figure
 
 
 def _status_legend(figure: Any, statuses: set[str]) -> None:
