@@ -40,8 +40,6 @@ class LocalPool:
     process, killed past ``timeout`` s."""
 
     def __init__(self, workers: int | None = None, timeout: float | None = None):
-        if workers is not None and workers < 1:
-            raise SweepError(f"--workers: expected at least 1, got {workers}")
         self.capacity = workers or os.cpu_count() or 1
         self.timeout = timeout
         self._running: list[IsolatedRun] = []
@@ -144,7 +142,9 @@ def _start_ray(address: str | None) -> None:
 
 def make_pool(ray: bool | str = False, workers: int | None = None, timeout: float | None = None) -> LocalPool | RayPool:
     """A :class:`LocalPool`, or with ``ray`` a :class:`RayPool` (``True``: a local cluster; a
-    string: the address of one)."""
+    string: the address of one); ``workers`` at least 1 (default: the machine's or the cluster's CPUs)."""
+    if workers is not None and workers < 1:
+        raise SweepError(f"--workers: expected at least 1, got {workers}")
     if ray is False:
         return LocalPool(workers, timeout)
     return RayPool(None if ray is True else ray, workers, timeout)

@@ -43,8 +43,9 @@ def test_a_grid_on_ray_is_the_grid_on_local_processes(rising, tmp_path, capsys):
 
 def test_pools_are_sized_and_checked():
     assert make_pool(workers=3).capacity == 3 and isinstance(make_pool(), LocalPool)
-    with pytest.raises(SweepError, match="--workers"):
-        LocalPool(workers=0)
+    for ray in (False, True):  # checked before a Ray cluster is started
+        with pytest.raises(SweepError, match="--workers: expected at least 1, got 0"):
+            make_pool(ray, workers=0)
 
 
 def test_a_file_taken_for_the_ray_address_is_refused(rising):
