@@ -260,12 +260,13 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_profile(args: argparse.Namespace) -> int:
-    """Run a graph file with timing on and print where each tick's time goes (no recording)."""
+    """Run a graph file with timing on and print where each tick's time goes (no recording:
+    recorders, views and videos off, as in a sweep's runs)."""
     import dgraph
     from dgraph.files import command_line_settings
+    from dgraph.sweep.outcome import quiet_overrides
 
-    quiet = {f"{name}.rerun": "off" for name in _recorder_names(args.file, ("Recorder", "RobotView"))[0]}
-    graph = dgraph.load(args.file, {**quiet, **command_line_settings(args.set)})
+    graph = dgraph.load(args.file, {**quiet_overrides(args.file), **command_line_settings(args.set)})
     graph.validate()
     with graph:
         print(graph.profile(_profile_ticks(args, graph)))
