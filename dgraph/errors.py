@@ -23,6 +23,14 @@ class SpecError(DGraphError, ValueError):
     """A value does not match a signal's declared shape or dtype, or holds NaN."""
 
 
+class NonFiniteError(SpecError):
+    """A value holds NaN, or a staged state inf, where a signal declares finite values."""
+
+
+class DivergenceError(DGraphError):
+    """A simulation diverged: its state is no longer finite, or no longer bounded."""
+
+
 class PlugError(DGraphError):
     """A plug is refused: shape mismatch, wrong direction, or entities in different graphs."""
 

@@ -607,7 +607,7 @@ class MujocoDevice(dg.Device):
         if not finite:
             problems.append("non-finite qpos/qvel")
         self._warning_counts = counts
-        raise dg.DGraphError(f"{self.name}: MuJoCo simulation diverged at tick {t}: {', '.join(problems)}; "
+        raise dg.DivergenceError(f"{self.name}: MuJoCo simulation diverged at tick {t}: {', '.join(problems)}; "
                              "the state at this tick is kept (lower the gains, the time step or the applied "
                              "wrenches)", entity=self.name)
 

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dgraph.errors import ComputeError, DGraphError, PlugError, SpecError, UnpluggedInputError
+from dgraph.errors import ComputeError, DGraphError, NonFiniteError, PlugError, SpecError, UnpluggedInputError
 from dgraph.signals.clock import Clock
 from dgraph.signals.spec import DType, ShapeDecl, Spec, exact_float_copy, non_finite, resolve_shape
 
@@ -527,7 +527,7 @@ class State(Output):
         if array is None:
             array = _coerce(self, value, copy)
             if spec.finite and spec.dtype == "float" and _infinite(array):
-                raise SpecError(f"{self.full_name}: staged value contains inf: {_short(array)}",
+                raise NonFiniteError(f"{self.full_name}: staged value contains inf: {_short(array)}",
                                 entity=self.entity.name if self.entity else None, signal=self.name)
         self._staged = array
 

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from dgraph.errors import SpecError
+from dgraph.errors import NonFiniteError, SpecError
 from dgraph.signals.value_types import VALUE_TYPES
 
 ShapeDecl = tuple[int | str | None, ...] | str | Callable[[Any], Any] | None
@@ -144,7 +144,7 @@ class Spec:
         if not self._shape_ok(array.shape):
             raise SpecError(f"{where}: value of shape {array.shape} does not match {self!r}")
         if self.dtype == "float" and self.finite is not None and has_nan(array):
-            raise SpecError(f"{where}: value contains NaN: {_short(value)}")
+            raise NonFiniteError(f"{where}: value contains NaN: {_short(value)}")
         return self._at_least_minimum(array, where)
 
     def _at_least_minimum(self, value: Any, where: str) -> Any:

@@ -6,8 +6,9 @@ A failure is an outcome, never an exception: ``status`` is one of :data:`STATUSE
 - ``ok``: the run lasted its duration without falling;
 - ``fell``: the fall signal (a bool output or state) was true at the end of a tick (``fall_time``,
   s), or the device it belongs to raised an error naming it (``stop_on_fall``);
-- ``diverged``: the run raised a :class:`~dgraph.errors.DGraphError` saying that the simulation
-  diverged, or that a value became infinite or NaN;
+- ``diverged``: the run raised a :class:`~dgraph.errors.DivergenceError` (the simulation
+  diverged) or a :class:`~dgraph.errors.NonFiniteError` (a value became NaN, a state infinite),
+  or an error caused by one;
 - ``error``: any other exception (its type and the first line of its message in ``message``);
 - ``timeout``, ``crashed``: the run's process took too long, or died (see
   :mod:`dgraph.sweep.isolation`; not produced here).
@@ -28,16 +29,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from dgraph.errors import DGraphError
+from dgraph.errors import DGraphError, DivergenceError, NonFiniteError
 from dgraph.sweep.spec import setting_text
 
 if TYPE_CHECKING:
     from dgraph.graph import Graph
 
 STATUSES = ("ok", "fell", "diverged", "error", "timeout", "crashed")
-DIVERGENCE_WORDS = ("diverg", "contains inf", "contains nan")
-"""What the message of a diverged run says (lower case): MuJoCo's divergence check, a staged
-state or a checked value that is no longer finite."""
 QUIET = {"Recorder": {"rerun": "off", "npz_path": None}, "RobotView": {"rerun": "off"},
          "WalkingView": {"rerun": "off"}, "MujocoDevice": {"video_path": None}}
 """The parameters that make an entity of each type write nothing (by type name)."""
@@ -183,9 +181,20 @@ def _failure(exc: Exception, run: Run, graph: Graph | None) -> tuple[str, float 
     message = one_line(exc)
     if isinstance(exc, DGraphError) and graph is not None and run.fall_signal == f"{exc.entity}.{exc.signal}":
         return "fell", (graph.t + 1) * graph.dt, message
-    if isinstance(exc, DGraphError) and any(word in str(exc).lower() for word in DIVERGENCE_WORDS):
+    if _caused_by(exc, (DivergenceError, NonFiniteError)):
         return "diverged", None, message
     return "error", None, message
+
+
+def _caused_by(exc: BaseException | None, kinds: tuple[type[BaseException], ...]) -> bool:
+    """Whether ``exc`` or an exception it was raised from (``__cause__``, ``__context__``) is one of ``kinds``."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, kinds):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 def one_line(exc: BaseException) -> str:

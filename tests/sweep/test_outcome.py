@@ -69,8 +69,16 @@ def test_an_error_raised_on_the_fall_signal_is_a_fall_at_the_end_of_its_tick():
     fell = dg.DGraphError("device: the robot fell during tick 41", entity="device", signal="fallen")
     assert failure(fell, run, graph) == ("fell", pytest.approx(0.42), "DGraphError: device: the robot fell during "
                                                                       "tick 41")
-    assert failure(dg.DGraphError("MuJoCo simulation diverged at tick 3"), run, graph)[0] == "diverged"
-    assert failure(dg.SpecError("x.y: value contains NaN: array([nan])"), run, graph)[0] == "diverged"
+    assert failure(dg.DivergenceError("MuJoCo simulation diverged at tick 3"), run, graph)[0] == "diverged"
+    assert failure(dg.NonFiniteError("x.y: value contains NaN: array([nan])"), run, graph)[0] == "diverged"
+    try:  # an output that failed on a NaN: the error it raised from says so
+        try:
+            raise dg.NonFiniteError("x.y: value contains NaN")
+        except dg.NonFiniteError as nan:
+            raise dg.ComputeError("x.z: computing failed") from nan
+    except dg.ComputeError as wrapped:
+        assert failure(wrapped, run, graph)[0] == "diverged"
+    assert failure(dg.DGraphError("the word diverged in a message"), run, graph)[0] == "error"  # a type, not words
     assert failure(dg.ComputeError("the QP failed\nmore detail"), run, graph) == ("error", None,
                                                                                   "ComputeError: the QP failed")
     assert failure(ZeroDivisionError("division by zero"), run, graph)[0] == "error"
