@@ -306,10 +306,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     process, locally or on Ray (see :mod:`dgraph.sweep`); the outcomes to a CSV table as they
     come (a run of the table is not made again: an interrupted sweep resumes), a plot at the end."""
     from dgraph.files import command_line_settings
-    from dgraph.sweep import Sweep, bisection_option, grid_axes, run_sweep
+    from dgraph.sweep import Sweep, SweepError, bisection_option, grid_axes, run_sweep
 
+    if args.tolerance is not None and not args.bisect:
+        raise SweepError("--tolerance: only with --bisect")
+    tolerance = 0.05 if args.tolerance is None else args.tolerance
     sweep = Sweep(args.files, settings=command_line_settings(args.set), grid=grid_axes(args.grid),
-                  bisection=bisection_option(args.bisect, args.tolerance) if args.bisect else None,
+                  bisection=bisection_option(args.bisect, tolerance) if args.bisect else None,
                   duration=args.duration, fall_signal=None if args.fall_signal == "none" else args.fall_signal,
                   measures=args.measure, timeout=args.timeout)
     out = Path(args.out or Path("out") / f"sweep_{Path(args.files[0]).stem}.csv")
@@ -334,7 +337,7 @@ def _add_sweep(sub: argparse._SubParsersAction, shared: dict[str, argparse.Argum
                             "(a vector in brackets: KEY=[1,0,0],[0,1,0]); repeatable")
     sweep.add_argument("--bisect", metavar="KEY=LOW:HIGH", help="in every grid cell, the largest value of KEY that "
                                                                 "survives: LOW must, HIGH must not (0 <= LOW < HIGH)")
-    sweep.add_argument("--tolerance", type=float, default=0.05, metavar="R",
+    sweep.add_argument("--tolerance", type=float, metavar="R",
                        help="relative width at which a bisection stops, HIGH - LOW <= R HIGH (default 0.05)")
     sweep.add_argument("--duration", type=float, metavar="S", help="seconds per run (default: each file's duration)")
     sweep.add_argument("--fall-signal", default="auto", metavar="SIGNAL",

@@ -83,8 +83,10 @@ class IsolatedRun:
         if not self._process.is_alive():
             return self._crashed()
         if self.remaining() == 0.0:
+            last = _last_line(self._log)  # where it was: the log goes with the process
             self.kill()
-            return self._ended("timeout", f"no outcome after {self.timeout:g} s: the process was killed")
+            return self._ended("timeout", f"no outcome after {self.timeout:g} s: the process was killed"
+                               + (f"; its last output: {last}" if last else ""))
         return None
 
     def kill(self) -> None:

@@ -44,6 +44,7 @@ def test_a_bisection_prints_each_cells_threshold(rising, tmp_path, capsys):
     (["--measure", "body.nothing"], "--measure body.nothing"),
     (["--fall-signal", "body.q"], "expected a bool scalar signal"),
     (["--workers", "0"], "--workers"),
+    (["--tolerance", "0.1"], "--tolerance: only with --bisect"),
 ])
 def test_a_mistake_exits_with_status_2_before_any_run(rising, tmp_path, capsys, args, message):
     assert main(["sweep", rising, "-q", *args]) == 2
